@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Install exactly the Debian 12 packages lamina needs to build, test and validate.
+# Idempotent: packages already present are skipped; apt is only called when something is missing.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libsuitesparse-dev libspectra-dev
+  libyaml-cpp-dev libmuparser-dev libcli11-dev libfmt-dev nlohmann-json3-dev
+  libnanoflann-dev libgmsh-dev
+  libgtest-dev libbenchmark-dev
+  python3 python3-matplotlib python3-numpy python3-vtk9
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "install-deps: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,102 @@
+// lamina — meshfree and particle analysis of thin-walled structures. Command-line entry point:
+//   lamina run CASE.yaml [-o OUTDIR] [--threads N] [--set key.path=value ...] [--quiet]
+//   lamina check CASE.yaml [--set ...]
+//   lamina validate [NAME ...] [-o DIR] [--fast]
+//   lamina info
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <iostream>
+
+#include "app/method_registry.hpp"
+#include "app/run_command.hpp"
+#include "app/validate_command.hpp"
+#include "core/error.hpp"
+#include "core/version.hpp"
+
+namespace {
+
+int print_input_error(const lamina::InputError& e) {
+  for (const auto& d : e.diagnostics()) std::cerr << "error: " << d.format() << "\n";
+  return 2;
+}
+
+int info() {
+  std::cout << fmt::format("lamina {}\nbuild type: {}\nthreads: {} (OpenMP, set OMP_NUM_THREADS or --threads)\n",
+                           lamina::version, lamina::build_type, omp_get_max_threads());
+  std::cout << "methods:\n";
+  for (const auto& m : lamina::app::methods()) std::cout << fmt::format("  {:<8} {}\n", m.keys.method, m.summary);
+  for (const auto& name : lamina::app::planned_methods()) std::cout << fmt::format("  {:<8} (not implemented yet)\n", name);
+  std::cout << "features: yaml case files, --set overrides, VTU/PVD output, Gmsh .msh import, muParser expressions,\n"
+               "          MLS shape functions (linear/quadratic, gauss/cubic/quartic spline, box/sphere/nearest/all/variable)\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"lamina: meshfree and particle analysis of thin-walled structures"};
+  cli.require_subcommand(1);
+  cli.set_version_flag("--version", std::string(lamina::version));
+
+  lamina::app::RunOptions run_options;
+  auto* run = cli.add_subcommand("run", "run a case file and write its results");
+  run->add_option("case", run_options.case_path, "case file (YAML)")->required();
+  run->add_option("-o,--output", run_options.output_directory, "output folder (default out/<case stem>)");
+  run->add_option("--threads", run_options.threads, "OpenMP threads (default: all)")->check(CLI::NonNegativeNumber);
+  run->add_option("--set", run_options.overrides, "override a case value: key.path=value")->take_all();
+  run->add_flag("--quiet", run_options.quiet, "no progress output");
+
+  std::string check_path;
+  std::vector<std::string> check_overrides;
+  auto* check = cli.add_subcommand("check", "validate a case file and print it resolved");
+  check->add_option("case", check_path, "case file (YAML)")->required();
+  check->add_option("--set", check_overrides, "override a case value: key.path=value")->take_all();
+
+  lamina::app::ValidateOptions validate_options;
+  auto* validate = cli.add_subcommand("validate", "run the validation suite and write a report");
+  validate->add_option("names", validate_options.names, "validation case names (default: all)");
+  validate->add_option("-o,--output", validate_options.output_directory, "report folder (default out/validation)");
+  validate->add_option("--dir", validate_options.validation_directory, "folder of validation cases");
+  validate->add_flag("--fast", validate_options.fast, "only the fast subset (what CI runs)");
+  validate->add_option("--threads", validate_options.threads, "OpenMP threads (default: all)");
+
+  auto* info_command = cli.add_subcommand("info", "version, build type, features, threads");
+
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = cli.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+
+  try {
+    if (*run) {
+      const auto result = lamina::app::run_case(run_options);
+      if (result.exit_code == 2) {
+        std::cerr << "lamina run: invalid input, nothing was run\n";
+        std::istringstream lines(result.error);
+        for (std::string line; std::getline(lines, line);) std::cerr << "error: " << line << "\n";
+      } else if (result.exit_code == 3) {
+        std::cerr << "lamina run: the analysis failed: " << result.error << "\n"
+                  << "the last good state is in " << result.output_directory.string() << "\n";
+      } else if (!run_options.quiet) {
+        std::cerr << "results: " << result.output_directory.string() << "\n";
+      }
+      return result.exit_code;
+    }
+    if (*check) return lamina::app::check_case(check_path, check_overrides);
+    if (*validate) return lamina::app::validate(validate_options);
+    if (*info_command) return info();
+  } catch (const lamina::InputError& e) {
+    return print_input_error(e);
+  } catch (const lamina::AnalysisError& e) {
+    std::cerr << "lamina: the analysis failed: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "lamina: internal error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,48 @@
+#include "app/mls_options_reader.hpp"
+
+namespace lamina::app {
+
+mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
+  mls::MlsOptions o;
+  o.dimension = dimension;
+  const std::string basis = section.word("basis", {"linear", "quadratic"}, "quadratic");
+  o.basis = basis == "linear" ? mls::Basis::linear : mls::Basis::quadratic;
+  const std::string weight = section.word("weight", {"gauss", "cubic_spline", "quartic_spline"}, "quartic_spline");
+  o.weight = weight == "gauss" ? mls::Weight::gauss : weight == "cubic_spline" ? mls::Weight::cubic_spline : mls::Weight::quartic_spline;
+  if (section.has("gauss_beta")) o.gauss_beta = section.real("gauss_beta", o.gauss_beta, 0.0, 100.0, true);
+  o.singular_remedy = section.boolean("singular_remedy", false);
+
+  io::NodeReader support = section.child("support");
+  if (support.defined() && support.expect_map()) {
+    // {shape: box|sphere, kappa: k} | {nearest: N} | {radius: [rx, ry, rz]} | {mode: all|variable, nearest: N, scale: s}
+    const bool has_nearest = support.has("nearest"), has_radius = support.has("radius"), has_kappa = support.has("kappa");
+    const std::string mode = support.word("mode", {"kappa", "fixed_radius", "nearest", "all", "variable"},
+                                          has_radius ? "fixed_radius" : (has_nearest && !has_kappa) ? "nearest" : "kappa");
+    o.mode = mode == "fixed_radius" ? mls::SupportMode::fixed_radius
+             : mode == "nearest"    ? mls::SupportMode::nearest
+             : mode == "all"        ? mls::SupportMode::all
+             : mode == "variable"   ? mls::SupportMode::variable
+                                    : mls::SupportMode::kappa;
+    const std::string default_shape = (o.mode == mls::SupportMode::kappa || o.mode == mls::SupportMode::fixed_radius) ? "box" : "sphere";
+    const std::string shape = support.word("shape", {"box", "sphere"}, default_shape);
+    o.shape = shape == "sphere" ? mls::SupportShape::sphere : mls::SupportShape::box;
+    const int m = (o.basis == mls::Basis::linear ? dimension + 1 : (dimension + 1) * (dimension + 2) / 2);
+    if (o.mode == mls::SupportMode::kappa) o.kappa = support.real("kappa", shape == "sphere" ? 2.5 : 2.0, 0.0, 100.0, true);
+    if (o.mode == mls::SupportMode::fixed_radius) {
+      Vec3 r = support.vec3("radius", std::nullopt);
+      if ((r.array() <= 0).any()) support.child("radius").error("positive radii");
+      o.radius = r;
+    }
+    if (o.mode == mls::SupportMode::nearest || o.mode == mls::SupportMode::all || o.mode == mls::SupportMode::variable)
+      o.nearest = static_cast<int>(support.integer("nearest", 27, m + 1, 100000));
+    if (o.mode != mls::SupportMode::kappa && o.mode != mls::SupportMode::fixed_radius)
+      o.scale = support.real("scale", 1.0, 0.0, 100.0, true);
+    support.reject_unknown_keys();
+    if (o.mode == mls::SupportMode::fixed_radius && o.shape == mls::SupportShape::sphere) {
+      // sphere with fixed radius uses the x radius
+    }
+  }
+  return o;
+}
+
+}  // namespace lamina::app

@@ -1,0 +1,144 @@
+#include "app/model.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "geometry/expression.hpp"
+#include "geometry/generators.hpp"
+#include "geometry/gmsh_import.hpp"
+#include "geometry/selection.hpp"
+
+namespace lamina::app {
+
+namespace {
+
+Diagnostic diagnostic_at(const io::SourceLocation& location, const std::string& expected, const std::string& found) {
+  return Diagnostic{location.file, location.line, location.column, location.key_path, expected, found};
+}
+
+PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec& spec) {
+  std::ifstream in(path);
+  PointCloud cloud;
+  std::vector<Vec3> points;
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty() || line[0] == '#') continue;
+    for (char& ch : line)
+      if (ch == ',' || ch == ';' || ch == '\t') ch = ' ';
+    std::istringstream fields(line);
+    Vec3 p;
+    if (!(fields >> p.x() >> p.y() >> p.z())) {
+      if (points.empty()) continue;  // a header line
+      throw InputError(Diagnostic{path, line_number, 1, "discretization.nodes.file", "x, y, z numbers", "'" + line + "'"});
+    }
+    points.push_back(p);
+  }
+  if (points.empty()) throw InputError(Diagnostic{path, 0, 0, "discretization.nodes.file", "at least one node", "none"});
+  cloud.positions.resize(3, static_cast<Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) cloud.positions.col(static_cast<Index>(i)) = points[i];
+  const Real volume = spec.type == geometry::GeometryType::mesh ? 0.0 : geometry::body_volume(spec);
+  cloud.volumes = Eigen::VectorXd::Constant(cloud.size(), volume / static_cast<Real>(cloud.size()));
+  return cloud;
+}
+
+/// Random perturbation of the nodes by up to `amount` local spacings per direction; nodes keep
+/// their position along a direction in which they lie on the bounding box (faces stay planar).
+void jitter_nodes(PointCloud& cloud, const io::Jitter& jitter, const geometry::GeometrySpec& spec) {
+  std::mt19937_64 generator(jitter.seed);
+  std::uniform_real_distribution<Real> uniform(-1.0, 1.0);
+  const Vec3 lower = cloud.positions.rowwise().minCoeff(), upper = cloud.positions.rowwise().maxCoeff();
+  const Real tolerance = 1e-9 * (upper - lower).norm();
+  for (Index i = 0; i < cloud.size(); ++i) {
+    Vec3 p = cloud.positions.col(i);
+    Vec3 moved = p;
+    for (int d = 0; d < 3; ++d) {
+      const Real step = uniform(generator);
+      if (std::abs(p[d] - lower[d]) < tolerance || std::abs(p[d] - upper[d]) < tolerance) continue;
+      const Real h = cloud.spacing.cols() == cloud.size() ? cloud.spacing(d, i) : 0.0;
+      moved[d] += jitter.amount * h * step;
+    }
+    if (spec.type == geometry::GeometryType::mesh || geometry::body_contains(spec, moved, tolerance))
+      cloud.positions.col(i) = moved;
+  }
+}
+
+}  // namespace
+
+IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& cloud) {
+  IndexList nodes;
+  try {
+    nodes = geometry::resolve_selection(selection.spec, cloud.positions, cloud.sets);
+  } catch (const geometry::ExpressionError& e) {
+    throw InputError(diagnostic_at(selection.location, "a valid expression", e.what()));
+  } catch (const std::out_of_range& e) {
+    throw InputError(diagnostic_at(selection.location, e.what(), "'" + selection.spec.set_name + "'"));
+  }
+  if (nodes.empty())
+    throw InputError(diagnostic_at(selection.location, "a selection that matches at least one node",
+                                   selection.spec.describe() + " matches none of the " + std::to_string(cloud.size()) + " nodes"));
+  return nodes;
+}
+
+Model build_point_model(const io::Case& c) {
+  Model model;
+  const auto& d = c.discretization;
+  if (c.geometry.type == geometry::GeometryType::mesh) {
+    model.cloud = geometry::import_gmsh(c.geometry.file).cloud;
+  } else if (d.nodes_file) {
+    model.cloud = read_nodes_csv(*d.nodes_file, c.geometry);
+  } else if (d.nodes) {
+    model.cloud = geometry::generate_volume_nodes(c.geometry, *d.nodes);
+  } else {
+    throw InputError(Diagnostic{c.file, c.geometry_location.line, 0, "discretization.nodes",
+                                "node counts [nx, ny, nz] or {file: nodes.csv}", "nothing"});
+  }
+  if (d.jitter && d.jitter->amount > 0) jitter_nodes(model.cloud, *d.jitter, c.geometry);
+
+  std::vector<Diagnostic> problems;
+  auto resolve = [&](const io::Selection& s) -> IndexList {
+    try {
+      return resolve_or_throw(s, model.cloud);
+    } catch (const InputError& e) {
+      problems.insert(problems.end(), e.diagnostics().begin(), e.diagnostics().end());
+      return {};
+    }
+  };
+  for (const auto& bc : c.boundary) model.boundary_nodes.push_back(resolve(bc.select));
+  for (const auto& load : c.loads) model.load_nodes.push_back(resolve(load.select));
+  for (const auto& m : c.materials) {
+    if (m.select) model.material_nodes.push_back(resolve(*m.select));
+    else {
+      IndexList all(model.cloud.size());
+      for (Index i = 0; i < model.cloud.size(); ++i) all[i] = i;
+      model.material_nodes.push_back(all);
+    }
+  }
+  for (const auto& p : c.probes) {
+    Probe probe;
+    probe.name = p.name;
+    probe.field = p.field;
+    probe.component = p.component;
+    probe.at = p.at;
+    if (p.select) probe.nodes = resolve(*p.select);
+    if (p.set) {
+      io::Selection s;
+      s.spec.kind = geometry::SelectionSpec::Kind::set;
+      s.spec.set_name = *p.set;
+      s.location = p.location;
+      s.location.key_path += ".set";
+      probe.nodes = resolve(s);
+      probe.nearest_in_set = p.at.has_value();
+    }
+    model.probes.push_back(probe);
+  }
+  if (!problems.empty()) throw InputError(problems);
+  return model;
+}
+
+}  // namespace lamina::app

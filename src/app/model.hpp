@@ -1,0 +1,29 @@
+#pragma once
+// The discretised body a method works on: nodes/particles generated from the case's geometry
+// and discretization, with every selection of the case resolved to node indices.
+#include <string>
+#include <vector>
+
+#include "core/point_cloud.hpp"
+#include "core/probe.hpp"
+#include "io/case.hpp"
+
+namespace lamina::app {
+
+struct Model {
+  PointCloud cloud;
+  std::vector<IndexList> boundary_nodes;  // per case.boundary entry
+  std::vector<IndexList> load_nodes;      // per case.loads entry
+  std::vector<IndexList> material_nodes;  // per case.materials entry (all nodes when unassigned)
+  std::vector<Probe> probes;              // resolved probes, in case order
+};
+
+/// Generate nodes from geometry + discretization.nodes (+ jitter, or a nodes file) and resolve
+/// all selections. Empty selections and unknown sets are input errors (exit 2).
+Model build_point_model(const io::Case& c);
+
+/// Resolve one selection against a point cloud, throwing InputError at the selection's
+/// file position if it is empty or invalid.
+IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& cloud);
+
+}  // namespace lamina::app

@@ -1,0 +1,447 @@
+#include "app/validate_command.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <optional>
+
+#include "app/run_command.hpp"
+#include "core/error.hpp"
+#include "io/csv_table.hpp"
+#include "io/yaml_reader.hpp"
+
+#ifndef LAMINA_SOURCE_DIR
+#define LAMINA_SOURCE_DIR "."
+#endif
+
+namespace lamina::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CheckSpec {
+  std::string quantity;                      // probe name (scalar) or table column (curve)
+  std::string reference_column;              // column of the reference CSV
+  std::optional<Real> reference_value;       // literal reference instead of a column
+  std::map<std::string, std::string> row;    // selects the reference row by column values
+  std::optional<std::string> x, reference_x; // curve comparison: interpolate lamina's x->quantity at reference_x
+  Real rel_tol = 0.0, abs_tol = 0.0;
+  std::optional<Real> max;                   // upper bound instead of a reference
+};
+
+struct PlotSpec {
+  std::string x, reference_x, title, xlabel, ylabel;
+  std::vector<std::string> y, reference_y;
+  bool log_x = false, log_y = false;
+};
+
+struct RunSpec {
+  std::string name;
+  std::vector<std::string> overrides;
+  std::string sweep_key, sweep_name;
+  std::vector<std::string> sweep_values;
+  std::vector<CheckSpec> checks;
+  std::optional<PlotSpec> plot;
+};
+
+struct ValidationCase {
+  std::string name, title, description;
+  fs::path directory;
+  bool fast = false;
+  std::string reference_file;
+  std::vector<RunSpec> runs;
+};
+
+ValidationCase read_validation_case(const fs::path& directory) {
+  ValidationCase v;
+  v.directory = directory;
+  v.name = directory.filename().string();
+  const fs::path check_file = directory / "check.yaml";
+  io::DiagnosticSink sink(check_file.string());
+  YAML::Node document = io::load_yaml_file(check_file.string(), sink);
+  sink.throw_if_any();
+  io::NodeReader root(document, "", &sink);
+  if (root.expect_map()) {
+    v.title = root.string("title", v.name);
+    v.description = root.string("description", "");
+    v.fast = root.boolean("fast", false);
+    v.reference_file = root.string("reference", "reference.csv");
+    io::NodeReader runs = root.required("runs");
+    if (runs.defined() && runs.expect_sequence()) {
+      for (const auto& r : runs.elements()) {
+        if (!r.expect_map()) continue;
+        RunSpec run;
+        run.name = r.string("name", std::nullopt);
+        io::NodeReader set = r.child("set");
+        if (set.defined() && set.expect_sequence())
+          for (const auto& s : set.elements())
+            if (auto text = s.as_string()) run.overrides.push_back(*text);
+        io::NodeReader sweep = r.child("sweep");
+        if (sweep.defined() && sweep.expect_map()) {
+          run.sweep_key = sweep.string("key", std::nullopt);
+          run.sweep_name = sweep.string("name", run.sweep_key.substr(run.sweep_key.rfind('.') + 1));
+          io::NodeReader values = sweep.required("values");
+          if (values.defined() && values.expect_sequence())
+            for (const auto& value : values.elements())
+              if (auto text = value.as_string()) run.sweep_values.push_back(*text);
+          sweep.reject_unknown_keys();
+        }
+        io::NodeReader checks = r.child("checks");
+        if (checks.defined() && checks.expect_sequence()) {
+          for (const auto& c : checks.elements()) {
+            if (!c.expect_map()) continue;
+            CheckSpec check;
+            check.quantity = c.string("quantity", std::nullopt);
+            if (c.has("reference")) {
+              io::NodeReader ref = c.child("reference");
+              char* end = nullptr;
+              const std::string text = ref.is_scalar() ? ref.node().Scalar() : std::string();
+              const double value = std::strtod(text.c_str(), &end);
+              if (!text.empty() && end && *end == '\0') check.reference_value = value;
+              else check.reference_column = ref.as_string().value_or("");
+            }
+            io::NodeReader row = c.child("row");
+            if (row.defined() && row.expect_map())
+              for (const auto& key : row.keys()) check.row[key] = row.string(key, std::nullopt);
+            if (row.defined()) row.reject_unknown_keys();
+            if (c.has("x")) check.x = c.string("x", std::nullopt);
+            if (c.has("reference_x")) check.reference_x = c.string("reference_x", std::nullopt);
+            check.rel_tol = c.real("rel_tol", 0.0, 0.0);
+            check.abs_tol = c.real("abs_tol", 0.0, 0.0);
+            if (c.has("max")) check.max = c.real("max", 0.0);
+            if (!check.max && !check.reference_value && check.reference_column.empty())
+              c.error("a reference (column name or number) or a max bound");
+            if (!check.max && check.rel_tol == 0.0 && check.abs_tol == 0.0) c.error("rel_tol and/or abs_tol");
+            c.reject_unknown_keys();
+            run.checks.push_back(check);
+          }
+        }
+        io::NodeReader plot = r.child("plot");
+        if (plot.defined() && plot.expect_map()) {
+          PlotSpec p;
+          p.x = plot.string("x", std::nullopt);
+          for (const auto& y : plot.required("y").elements()) p.y.push_back(y.as_string().value_or(""));
+          p.reference_x = plot.string("reference_x", "");
+          if (plot.has("reference_y"))
+            for (const auto& y : plot.child("reference_y").elements()) p.reference_y.push_back(y.as_string().value_or(""));
+          p.title = plot.string("title", v.name + " / " + run.name);
+          p.xlabel = plot.string("xlabel", p.x);
+          p.ylabel = plot.string("ylabel", "");
+          p.log_x = plot.boolean("log_x", false);
+          p.log_y = plot.boolean("log_y", false);
+          plot.reject_unknown_keys();
+          run.plot = p;
+        }
+        r.reject_unknown_keys();
+        v.runs.push_back(run);
+      }
+    }
+    root.reject_unknown_keys();
+  }
+  sink.throw_if_any();
+  return v;
+}
+
+/// A lamina table: columns + numeric rows (a run's history, or a sweep's final probes).
+struct Table {
+  std::vector<std::string> columns;
+  std::vector<std::vector<Real>> rows;
+  int column(const std::string& name) const {
+    auto it = std::find(columns.begin(), columns.end(), name);
+    return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
+  }
+};
+
+std::optional<Real> interpolate(const Table& t, const std::string& x, const std::string& y, Real at) {
+  const int cx = t.column(x), cy = t.column(y);
+  if (cx < 0 || cy < 0 || t.rows.empty()) return std::nullopt;
+  std::vector<std::pair<Real, Real>> points;
+  for (const auto& row : t.rows) points.emplace_back(row[cx], row[cy]);
+  std::sort(points.begin(), points.end());
+  const Real span = points.back().first - points.front().first;
+  const Real slack = 1e-9 * std::max<Real>(1.0, std::abs(span));
+  if (at < points.front().first - slack || at > points.back().first + slack) return std::nullopt;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (std::abs(points[i].first - at) <= slack) return points[i].second;
+    if (i > 0 && at < points[i].first) {
+      const Real s = (at - points[i - 1].first) / (points[i].first - points[i - 1].first);
+      return points[i - 1].second + s * (points[i].second - points[i - 1].second);
+    }
+  }
+  return points.back().second;
+}
+
+struct CheckRow {
+  std::string case_name, run_name, quantity;
+  Real lamina = NAN, reference = NAN, error = NAN, tolerance = NAN;
+  std::string reference_text, error_kind;
+  bool pass = false;
+  double seconds = 0;
+  std::string note;
+};
+
+std::string number(Real v) {
+  if (std::isnan(v)) return "-";
+  return fmt::format("{:.6g}", v);
+}
+
+bool within(Real lamina, Real reference, const CheckSpec& c, Real& error, Real& tolerance, std::string& kind) {
+  const Real difference = std::abs(lamina - reference);
+  if (c.rel_tol > 0 && c.abs_tol == 0) {
+    error = reference != 0 ? difference / std::abs(reference) : difference;
+    tolerance = c.rel_tol;
+    kind = "rel";
+  } else if (c.abs_tol > 0 && c.rel_tol == 0) {
+    error = difference;
+    tolerance = c.abs_tol;
+    kind = "abs";
+  } else {
+    error = difference;
+    tolerance = c.abs_tol + c.rel_tol * std::abs(reference);
+    kind = "abs";
+  }
+  return std::isfinite(lamina) && error <= tolerance;
+}
+
+}  // namespace
+
+int validate(const ValidateOptions& options) {
+  const fs::path root = options.validation_directory.empty() ? fs::path(LAMINA_SOURCE_DIR) / "validation"
+                                                             : fs::path(options.validation_directory);
+  if (!fs::is_directory(root)) {
+    std::cerr << "lamina validate: no validation folder at " << root << "\n";
+    return 2;
+  }
+  std::vector<fs::path> folders;
+  for (const auto& entry : fs::directory_iterator(root))
+    if (entry.is_directory() && fs::exists(entry.path() / "check.yaml")) folders.push_back(entry.path());
+  std::sort(folders.begin(), folders.end());
+  for (const auto& name : options.names) {
+    if (std::none_of(folders.begin(), folders.end(), [&](const fs::path& p) { return p.filename() == name; })) {
+      std::cerr << fmt::format("lamina validate: unknown validation case '{}' (no {}/{}/check.yaml)\n", name, root.string(), name);
+      return 2;
+    }
+  }
+
+  std::vector<ValidationCase> cases;
+  int status = 0;
+  for (const auto& folder : folders) {
+    const std::string name = folder.filename().string();
+    if (!options.names.empty() && std::find(options.names.begin(), options.names.end(), name) == options.names.end()) continue;
+    try {
+      ValidationCase v = read_validation_case(folder);
+      if (options.fast && options.names.empty() && !v.fast) continue;
+      cases.push_back(v);
+    } catch (const InputError& e) {
+      std::cerr << e.what() << "\n";
+      status = 2;
+    }
+  }
+  if (status) return status;
+
+  const fs::path out = options.output_directory;
+  fs::create_directories(out);
+  std::vector<CheckRow> table;
+  nlohmann::json plots = nlohmann::json::array();
+  std::map<std::string, std::string> descriptions;
+
+  for (const auto& v : cases) {
+    descriptions[v.name] = v.title + (v.description.empty() ? "" : ". " + v.description);
+    std::optional<io::CsvTable> reference;
+    std::string reference_source;
+    const fs::path reference_path = v.directory / v.reference_file;
+    if (fs::exists(reference_path)) {
+      reference = io::CsvTable::read(reference_path.string());
+      for (const auto& comment : reference->comments) reference_source += (reference_source.empty() ? "" : " ") + comment;
+    }
+    for (const auto& run : v.runs) {
+      const auto start = std::chrono::steady_clock::now();
+      Table lamina;
+      std::string failure;
+      auto run_once = [&](const std::vector<std::string>& overrides, const fs::path& directory) -> std::optional<RunResult> {
+        RunOptions ro;
+        ro.case_path = (v.directory / "case.yaml").string();
+        ro.output_directory = directory.string();
+        ro.overrides = overrides;
+        ro.quiet = true;
+        ro.threads = options.threads;
+        RunResult r = run_case(ro);
+        if (r.exit_code != 0) {
+          failure = fmt::format("run failed (exit {}): {}", r.exit_code, r.error);
+          return std::nullopt;
+        }
+        return r;
+      };
+      nlohmann::json final_probes;
+      if (!run.sweep_key.empty()) {
+        lamina.columns.push_back(run.sweep_name);
+        for (const auto& value : run.sweep_values) {
+          auto overrides = run.overrides;
+          overrides.push_back(run.sweep_key + "=" + value);
+          auto r = run_once(overrides, out / v.name / fmt::format("{}_{}", run.name, value));
+          if (!r) break;
+          if (lamina.columns.size() == 1)
+            for (auto it = r->summary["probes"].begin(); it != r->summary["probes"].end(); ++it) lamina.columns.push_back(it.key());
+          std::vector<Real> row{std::stod(value)};
+          for (std::size_t c = 1; c < lamina.columns.size(); ++c) row.push_back(r->summary["probes"][lamina.columns[c]].get<Real>());
+          lamina.rows.push_back(row);
+          final_probes = r->summary["probes"];
+        }
+      } else if (auto r = run_once(run.overrides, out / v.name / run.name)) {
+        lamina.columns = r->history_columns;
+        lamina.rows = r->history_rows;
+        final_probes = r->summary["probes"];
+      }
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+      // lamina's table next to the report (for the plots and for users)
+      {
+        std::ofstream csv(out / fmt::format("{}_{}.csv", v.name, run.name));
+        for (std::size_t c = 0; c < lamina.columns.size(); ++c) csv << (c ? "," : "") << lamina.columns[c];
+        csv << "\n";
+        for (const auto& row : lamina.rows) {
+          for (std::size_t c = 0; c < row.size(); ++c) csv << (c ? "," : "") << fmt::format("{:.12g}", row[c]);
+          csv << "\n";
+        }
+      }
+
+      for (const auto& check : run.checks) {
+        CheckRow row{v.name, run.name, check.quantity};
+        row.seconds = seconds;
+        if (!failure.empty()) {
+          row.note = failure;
+          table.push_back(row);
+          continue;
+        }
+        // reference rows that match the row filter
+        std::vector<std::size_t> reference_rows;
+        if (reference)
+          for (std::size_t i = 0; i < reference->rows.size(); ++i) {
+            bool match = true;
+            for (const auto& [column, value] : check.row) {
+              const int c = reference->column(column);
+              if (c < 0 || reference->rows[i][static_cast<std::size_t>(c)] != value) match = false;
+            }
+            if (match) reference_rows.push_back(i);
+          }
+        if (check.max) {
+          row.lamina = final_probes.contains(check.quantity) ? final_probes[check.quantity].get<Real>() : NAN;
+          row.reference_text = "<= " + number(*check.max);
+          row.error = row.lamina;
+          row.tolerance = *check.max;
+          row.error_kind = "value";
+          row.pass = std::isfinite(row.lamina) && row.lamina <= *check.max;
+        } else if (check.x) {
+          // curve: worst error over the reference points
+          Real worst = -1;
+          row.pass = !reference_rows.empty();
+          for (std::size_t i : reference_rows) {
+            auto at = reference->number(i, check.reference_x.value_or(*check.x));
+            auto ref = reference->number(i, check.reference_column);
+            if (!at || !ref) continue;
+            auto value = interpolate(lamina, *check.x, check.quantity, *at);
+            Real error = NAN, tolerance = NAN;
+            std::string kind;
+            const bool ok = value && within(*value, *ref, check, error, tolerance, kind);
+            row.pass = row.pass && ok;
+            if (!value) error = INFINITY;
+            if (error > worst || std::isnan(error)) {
+              worst = error, row.lamina = value.value_or(NAN), row.reference = *ref, row.error = error,
+              row.tolerance = tolerance, row.error_kind = kind;
+              row.note = fmt::format("worst of {} points, at {} = {}", reference_rows.size(), *check.x, number(*at));
+            }
+          }
+        } else {
+          row.lamina = final_probes.contains(check.quantity) ? final_probes[check.quantity].get<Real>() : NAN;
+          if (check.reference_value) row.reference = *check.reference_value;
+          else if (reference_rows.size() == 1) row.reference = reference->number(reference_rows[0], check.reference_column).value_or(NAN);
+          else row.note = fmt::format("{} reference rows match", reference_rows.size());
+          if (std::isnan(row.lamina)) row.note = "lamina has no probe '" + check.quantity + "'";
+          row.pass = !std::isnan(row.reference) && within(row.lamina, row.reference, check, row.error, row.tolerance, row.error_kind);
+        }
+        if (row.reference_text.empty()) row.reference_text = number(row.reference);
+        table.push_back(row);
+      }
+
+      if (run.plot && !lamina.rows.empty()) {
+        nlohmann::json p;
+        p["png"] = (out / fmt::format("{}_{}.png", v.name, run.name)).string();
+        p["title"] = run.plot->title;
+        p["xlabel"] = run.plot->xlabel;
+        p["ylabel"] = run.plot->ylabel;
+        p["log_x"] = run.plot->log_x;
+        p["log_y"] = run.plot->log_y;
+        p["lamina_csv"] = (out / fmt::format("{}_{}.csv", v.name, run.name)).string();
+        p["x"] = run.plot->x;
+        p["y"] = run.plot->y;
+        p["reference_csv"] = reference ? reference_path.string() : "";
+        p["reference_x"] = run.plot->reference_x;
+        p["reference_y"] = run.plot->reference_y;
+        p["reference_label"] = reference_source;
+        plots.push_back(p);
+      }
+    }
+  }
+
+  // console table
+  bool all_pass = true;
+  std::cout << fmt::format("{:<28} {:<18} {:<8} {:>13} {:>13} {:>10} {:>10} {:>5} {:>8}\n", "case", "run", "quantity",
+                           "lamina", "reference", "error", "tolerance", "pass", "time_s");
+  for (const auto& r : table) {
+    all_pass = all_pass && r.pass;
+    std::cout << fmt::format("{:<28} {:<18} {:<8} {:>13} {:>13} {:>10} {:>10} {:>5} {:>8.2f}{}\n", r.case_name, r.run_name,
+                             r.quantity, number(r.lamina), r.reference_text, number(r.error), number(r.tolerance),
+                             r.pass ? "PASS" : "FAIL", r.seconds, r.note.empty() ? "" : "  (" + r.note + ")");
+  }
+
+  // plots through matplotlib (Debian python3-matplotlib)
+  std::string plot_status;
+  if (!plots.empty()) {
+    const fs::path spec = out / "plots.json";
+    std::ofstream(spec) << plots.dump(2);
+    const fs::path script = fs::path(LAMINA_SOURCE_DIR) / "scripts" / "plot_validation.py";
+    const std::string command = fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), spec.string(),
+                                            (out / "plots.log").string());
+    if (std::system(command.c_str()) != 0) plot_status = "plotting failed, see plots.log";
+  }
+
+  // report.md
+  std::ofstream report(out / "report.md");
+  report << "# lamina validation report\n\n";
+  report << fmt::format("{} checks, {} passed, {} failed{}.\n\n", table.size(),
+                        std::count_if(table.begin(), table.end(), [](const CheckRow& r) { return r.pass; }),
+                        std::count_if(table.begin(), table.end(), [](const CheckRow& r) { return !r.pass; }),
+                        options.fast ? " (fast subset)" : "");
+  report << "| case | run | quantity | lamina | reference | error | tolerance | result | time (s) |\n";
+  report << "|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& r : table)
+    report << fmt::format("| {} | {} | {} | {} | {} | {} {} | {} | {} | {:.2f} |\n", r.case_name, r.run_name, r.quantity,
+                          number(r.lamina), r.reference_text, number(r.error), r.error_kind, number(r.tolerance),
+                          r.pass ? "pass" : "**FAIL**" + (r.note.empty() ? std::string() : " (" + r.note + ")"), r.seconds);
+  report << "\n";
+  for (const auto& v : cases) {
+    report << fmt::format("## {}\n\n{}\n\n", v.name, descriptions[v.name]);
+    const fs::path readme = v.directory / "README.md";
+    for (const auto& p : plots) {
+      const std::string png = p["png"].get<std::string>();
+      if (fs::path(png).filename().string().rfind(v.name + "_", 0) == 0 && fs::exists(png))
+        report << fmt::format("![{}]({})\n\n", p["title"].get<std::string>(), fs::path(png).filename().string());
+    }
+    if (fs::exists(readme)) report << fmt::format("Case description: `validation/{}/README.md`.\n\n", v.name);
+  }
+  if (!plot_status.empty()) report << "Note: " << plot_status << "\n";
+  std::cout << fmt::format("report: {}\n", (out / "report.md").string());
+  if (!plot_status.empty()) std::cout << plot_status << "\n";
+  return all_pass ? 0 : 1;
+}
+
+}  // namespace lamina::app

@@ -1,0 +1,60 @@
+#pragma once
+// The interface every method family implements: run to completion while reporting output
+// points, evaluate probes, and expose fields for VTU output.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/probe.hpp"
+#include "core/types.hpp"
+
+namespace lamina {
+
+/// One named point field for output (components = 1, 3 or 6 (xx yy zz xy yz zx)).
+struct PointField {
+  std::string name;
+  int components = 1;
+  std::vector<Real> values;  // size = points * components, point-major
+};
+
+/// What a VTU file shows at one output point: points (as vertex cells, or with quad/hex cells).
+struct OutputFrame {
+  PointMatrix points;
+  int cell_vertices = 1;                 // 1 = VTK_VERTEX per point, 4 = VTK_QUAD, 8 = VTK_HEXAHEDRON
+  std::vector<Index> cell_connectivity;  // cell_vertices per cell (empty for vertex cells)
+  std::vector<PointField> point_fields;
+};
+
+struct RunCounts {
+  Index nodes = 0;
+  Index dofs = 0;
+  Index steps = 0;
+};
+
+/// Receives the analysis' output points and progress (implemented by the application).
+class OutputSink {
+ public:
+  virtual ~OutputSink() = default;
+  /// Called at each output point: the application evaluates probes and writes a VTU frame.
+  virtual void output_point(Index step, Real time, Real load_factor) = 0;
+  /// Progress of a long run: fraction done in [0,1] and a short status text.
+  virtual void progress(Real fraction, const std::string& status) = 0;
+};
+
+class Analysis {
+ public:
+  virtual ~Analysis() = default;
+  virtual std::string method() const = 0;
+  /// Run to the end, calling sink.output_point at every output point (at least once, at the end).
+  virtual void run(OutputSink& sink) = 0;
+  /// Evaluate one probe in the current state. Throws InputError for an unsupported field/component.
+  virtual Real probe(const Probe& probe) const = 0;
+  /// Probes the method always reports (e.g. mls_fit's errU, errDU, errDDU).
+  virtual std::map<std::string, Real> builtin_probes() const { return {}; }
+  virtual OutputFrame frame() const = 0;
+  virtual RunCounts counts() const = 0;
+  /// Named timings (seconds) of the stages, e.g. {"setup_s", ...}; summary.json lists them.
+  virtual std::map<std::string, Real> timings() const { return {}; }
+};
+
+}  // namespace lamina

@@ -1,0 +1,20 @@
+#pragma once
+// A probe as the solvers see it: a named scalar to evaluate at every output point
+// (value at a point, sum over a resolved node selection, or a global energy).
+#include <optional>
+#include <string>
+
+#include "core/types.hpp"
+
+namespace lamina {
+
+struct Probe {
+  std::string name;
+  std::string field;        // displacement, velocity, stress, strain, reaction_force, energy, eigenvalue, ...
+  std::string component;    // x y z xx yy zz xy yz zx magnitude von_mises internal kinetic ... or an index
+  std::optional<Vec3> at;   // evaluation point (field value probes)
+  IndexList nodes;          // resolved selection (reaction_force sums) or the node set for `set:` probes
+  bool nearest_in_set = false;  // `at` + `set`: take the nearest node of `nodes`
+};
+
+}  // namespace lamina

@@ -1,0 +1,114 @@
+#pragma once
+// The case file as typed data (PRODUCT.md section 3): the sections common to all methods.
+// Method sections (efg:, pd:, mpm:, mpfem:, mls_fit:) stay as YAML and are read by the application.
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/expression.hpp"
+#include "geometry/geometry_spec.hpp"
+#include "geometry/selection.hpp"
+#include "material/material_spec.hpp"
+
+namespace lamina::io {
+
+/// Where something came from in the case file (for messages raised after parsing).
+struct SourceLocation {
+  std::string file;
+  int line = 0, column = 0;
+  std::string key_path;
+};
+
+struct Selection {
+  geometry::SelectionSpec spec;
+  SourceLocation location;
+};
+
+/// How a load or prescribed value grows with the analysis' load factor / time.
+struct Ramp {
+  enum class Kind { linear, step, table };
+  Kind kind = Kind::linear;
+  std::vector<std::array<Real, 2>> table;  // (t, f) pairs for Kind::table
+  Real factor(Real t, Real end_time) const;
+};
+
+struct MaterialEntry {
+  material::MaterialSpec spec;
+  std::optional<Selection> select;  // part of the body it applies to (none = everywhere)
+};
+
+struct BoundaryCondition {
+  Selection select;
+  std::array<bool, 6> fixed{};                             // x y z rx ry rz
+  std::array<std::optional<geometry::ScalarField>, 3> displacement;
+  std::array<std::optional<geometry::ScalarField>, 3> velocity;
+  Ramp ramp;
+  SourceLocation location;
+};
+
+struct Load {
+  enum class Kind { force, traction, pressure, body_force, mass, initial_velocity };
+  Kind kind = Kind::force;
+  Selection select;
+  std::array<geometry::ScalarField, 3> vector;  // force, traction, body_force, initial_velocity
+  geometry::ScalarField scalar;                 // pressure, mass
+  Ramp ramp;
+  SourceLocation location;
+};
+
+struct ProbeEntry {
+  std::string name;
+  std::string field;
+  std::string component;
+  std::optional<Vec3> at;
+  std::optional<std::string> set;
+  std::optional<Selection> select;
+  SourceLocation location;
+};
+
+struct Jitter {
+  Real amount = 0.0;  // fraction of the local spacing
+  unsigned seed = 1;
+};
+
+struct Discretization {
+  std::optional<std::array<int, 3>> nodes;       // efg, mls_fit
+  std::optional<std::string> nodes_file;         // CSV x,y,z
+  std::optional<Jitter> jitter;
+  std::optional<Vec3> spacing;                   // pd
+  std::optional<Real> horizon, horizon_factor;   // pd
+  std::optional<std::array<int, 2>> elements;    // mpm
+  std::optional<Real> grid_cell;                 // mpm
+  std::optional<std::array<int, 2>> particles;   // mpfem
+  std::optional<std::string> particles_file;     // mpfem
+};
+
+struct OutputOptions {
+  bool vtu = true;
+  int every = 1;  // write every n-th output point as VTU (history gets all)
+};
+
+struct Case {
+  std::string file;      // path of the case file
+  std::string stem;      // file name without extension
+  std::string title;
+  std::string method;
+  std::string units;
+  std::vector<MaterialEntry> materials;
+  geometry::GeometrySpec geometry;
+  SourceLocation geometry_location;
+  Discretization discretization;
+  std::vector<BoundaryCondition> boundary;
+  std::vector<Load> loads;
+  std::vector<ProbeEntry> probes;
+  OutputOptions output;
+  YAML::Node method_section;   // the `<method>:` mapping (may be undefined)
+  YAML::Node imperfection;     // pd
+  YAML::Node resolved;         // the whole document after --set overrides (for check / log)
+};
+
+}  // namespace lamina::io

@@ -1,0 +1,16 @@
+#pragma once
+// Writes an OutputFrame as a VTK XML UnstructuredGrid (.vtu, base64 binary data) and the
+// ParaView collection (.pvd) that lists the frames with their times.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/analysis.hpp"
+
+namespace lamina::io {
+
+void write_vtu(const std::string& path, const OutputFrame& frame);
+/// entries: (time, vtu file name relative to the .pvd)
+void write_pvd(const std::string& path, const std::vector<std::pair<Real, std::string>>& entries);
+
+}  // namespace lamina::io

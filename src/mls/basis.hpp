@@ -1,0 +1,73 @@
+#pragma once
+// Complete polynomial bases p(z) of the MLS approximation (seed 004, eq 1-4), linear or quadratic in
+// 1, 2 or 3 dimensions, in scaled local coordinates z = (x - centre) / rho, with derivatives at z = 0.
+#include <array>
+
+#include "core/types.hpp"
+#include "mls/mls_options.hpp"
+
+namespace lamina::mls {
+
+/// Term order: 1, z_1..z_d, then (quadratic) z_1^2..z_d^2, then the cross terms in the order
+/// z_1 z_2, z_2 z_3, z_3 z_1 (3D) or z_1 z_2 (2D) -- the same order as second-derivative rows
+/// (xx yy zz xy yz zx).
+template <int Dim, Basis B>
+struct PolynomialBasis {
+  static_assert(Dim >= 1 && Dim <= 3);
+  static constexpr int dimension = Dim;
+  static constexpr int size = B == Basis::linear ? Dim + 1 : (Dim + 1) * (Dim + 2) / 2;
+  /// Number of independent second derivatives in Dim dimensions (1, 3, 6).
+  static constexpr int second_count = Dim * (Dim + 1) / 2;
+  using Vector = Eigen::Matrix<Real, size, 1>;
+
+  /// Second-derivative pair (i, j) of component k in the 6-row layout xx yy zz xy yz zx.
+  static constexpr std::array<int, 6> pair_first{0, 1, 2, 0, 1, 2};
+  static constexpr std::array<int, 6> pair_second{0, 1, 2, 1, 2, 0};
+  /// Row k (0..5) of the 6-row layout used in Dim dimensions, listed first to last.
+  static constexpr std::array<int, 3> used_second_rows() {
+    if constexpr (Dim == 1) return {0, -1, -1};
+    else if constexpr (Dim == 2) return {0, 1, 3};
+    else return {0, 1, 2};
+  }
+
+  /// Writes p(z) to out[0..size).
+  static void values(const Real* z, Real* out) {
+    out[0] = 1.0;
+    for (int d = 0; d < Dim; ++d) out[1 + d] = z[d];
+    if constexpr (B == Basis::quadratic) {
+      for (int d = 0; d < Dim; ++d) out[1 + Dim + d] = z[d] * z[d];
+      if constexpr (Dim == 2) out[5] = z[0] * z[1];
+      if constexpr (Dim == 3) {
+        out[7] = z[0] * z[1];
+        out[8] = z[1] * z[2];
+        out[9] = z[2] * z[0];
+      }
+    }
+  }
+
+  /// dp/dx_i at z = 0 for z = (x - centre) / rho: only the term z_i is hit, with 1 / rho_i.
+  static Vector first_derivative_at_origin(int i, const Vec3& rho) {
+    Vector p = Vector::Zero();
+    p[1 + i] = 1.0 / rho[i];
+    return p;
+  }
+
+  /// d2p/dx_i dx_j at z = 0 (row k of the layout xx yy zz xy yz zx, i.e. i = pair_first[k], j = pair_second[k]).
+  static Vector second_derivative_at_origin(int k, const Vec3& rho) {
+    Vector p = Vector::Zero();
+    if constexpr (B == Basis::quadratic) {
+      const int i = pair_first[k];
+      const int j = pair_second[k];
+      if (i == j) {
+        p[1 + Dim + i] = 2.0 / (rho[i] * rho[i]);
+      } else if constexpr (Dim == 2) {
+        p[5] = 1.0 / (rho[0] * rho[1]);
+      } else if constexpr (Dim == 3) {
+        p[7 + (k - 3)] = 1.0 / (rho[i] * rho[j]);
+      }
+    }
+    return p;
+  }
+};
+
+}  // namespace lamina::mls

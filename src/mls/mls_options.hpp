@@ -1,0 +1,70 @@
+#pragma once
+// Options of the moving least squares (MLS) approximation: polynomial basis, weight function,
+// support shape and how support sizes are chosen (seed 004, eqs 1-4..1-8; OMLL program names).
+#include <string>
+
+#include "core/types.hpp"
+
+namespace lamina::mls {
+
+/// Complete polynomial basis p(x) of eq 1-4: linear (m = d + 1) or quadratic (m = (d+1)(d+2)/2).
+enum class Basis { linear, quadratic };
+
+/// Weight function w(s), s = distance / support radius in [0, 1] (eqs 1-6, 1-7, 1-8).
+enum class Weight { gauss, cubic_spline, quartic_spline };
+
+/// Support of a weight: box = tensor product w(|dx|/Rx) w(|dy|/Ry) w(|dz|/Rz); sphere = w(|x - x_I|/R).
+enum class SupportShape { box, sphere };
+
+/// How support sizes are chosen (names of the seed's OMLL program in brackets).
+///  kappa        node-centred, R_I,d = kappa * h_I,d (h_I = local nodal spacing)        [default]
+///  fixed_radius node-centred, R_d = radius[d] for every node                          [INFLENCEDOMAIN Fix]
+///  nearest      point-centred: neighbours = the N nearest nodes of x,
+///               R(x) = scale * (distance to the N-th nearest)                          [SELECT]
+///  all          node-centred, R_I = scale * (distance from node I to its N-th nearest other node) [ALL]
+///  variable     point-centred: R(x) = scale * (distance from x to its N-th nearest node),
+///               neighbours = every node inside that support (= the N nearest when scale = 1) [VARIABLE]
+enum class SupportMode { kappa, fixed_radius, nearest, all, variable };
+
+/// Every radius is multiplied by (1 + support_epsilon) so that nodes lying exactly at kappa * h
+/// (regular grids) or at the N-th nearest distance are inside the support ("radius s + delta").
+inline constexpr Real support_epsilon = 1e-9;
+
+/// Default Gaussian sharpness beta of eq 1-6. The seed gives the formula without a value; 2.5 is our
+/// choice: exp(-beta^2) = 1.9e-3, so the truncation shift is small and the bell resembles the splines.
+inline constexpr Real default_gauss_beta = 2.5;
+
+struct MlsOptions {
+  int dimension = 3;                        // 1, 2 or 3: only the first `dimension` coordinates are used
+  Basis basis = Basis::quadratic;
+  Weight weight = Weight::quartic_spline;
+  Real gauss_beta = default_gauss_beta;     // only for Weight::gauss
+  SupportShape shape = SupportShape::box;
+  SupportMode mode = SupportMode::kappa;
+  Real kappa = 2.0;                         // mode kappa: R_I,d = kappa * h_I,d (sphere: kappa * max_d h_I,d)
+  Vec3 radius = Vec3::Zero();               // mode fixed_radius: [rx, ry, rz] (sphere uses radius[0])
+  int nearest = 27;                         // modes nearest / all / variable: N
+  Real scale = 1.0;                         // modes nearest / all / variable: radius = scale * distance to N-th
+  /// SINCHECK remedy. Radius modes (kappa, fixed_radius, all): the radii used at this evaluation point
+  /// are multiplied by 1.25 per step (at most remedy_max_steps steps); nearest-N modes (nearest,
+  /// variable): N grows by 1 per step (at most remedy_max_steps steps or all nodes).
+  bool singular_remedy = false;
+  int remedy_max_steps = 64;
+  /// Largest accepted estimate of the 1-norm condition number of the Jacobi-scaled moment matrix A.
+  /// 1e12 keeps about 4 significant digits of the shape functions in the worst case (eps = 2.2e-16);
+  /// healthy supports give 1e1..1e5, singular ones 1e16 and more.
+  Real max_condition = 1e12;
+
+  /// Throws lamina::InputError (key paths "mls.<field>") if a value is out of range.
+  void validate() const;
+};
+
+/// Number of basis terms m for the given dimension and basis (2/3, 3/6, 4/10).
+int basis_size(int dimension, Basis basis);
+
+std::string to_string(Basis basis);
+std::string to_string(Weight weight);
+std::string to_string(SupportShape shape);
+std::string to_string(SupportMode mode);
+
+}  // namespace lamina::mls
