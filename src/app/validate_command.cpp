@@ -315,7 +315,10 @@ int validate(const ValidateOptions& options) {
       }
 
       for (const auto& check : run.checks) {
-        CheckRow row{v.name, run.name, check.quantity};
+        CheckRow row;
+        row.case_name = v.name;
+        row.run_name = run.name;
+        row.quantity = check.quantity;
         row.seconds = seconds;
         if (!failure.empty()) {
           row.note = failure;

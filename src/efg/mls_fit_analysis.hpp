@@ -1,6 +1,7 @@
 #pragma once
 // `method: mls_fit` — fits an analytic field with MLS on the case's nodes and reports the
 // relative errors errU, errDU, errDDU (in percent) of seed 004 eqs (3-3)-(3-5).
+#include <memory>
 #include <string>
 
 #include "core/analysis.hpp"

@@ -95,7 +95,7 @@ static std::string child_path(const std::string& parent, const std::string& key)
 bool NodeReader::has(const std::string& key) const {
   if (!node_.IsMap()) return false;
   const YAML::Node& self = node_;
-  const YAML::Node c = std::as_const(self)[key];
+  const YAML::Node c = self[key];
   known_->insert(key);
   return c.IsDefined() && !c.IsNull();
 }
@@ -104,7 +104,10 @@ NodeReader NodeReader::child(const std::string& key) const {
   known_->insert(key);
   if (!node_.IsMap()) return NodeReader(YAML::Node(YAML::NodeType::Undefined), child_path(path_, key), sink_);
   const YAML::Node& self = node_;
-  return NodeReader(std::as_const(self)[key], child_path(path_, key), sink_);
+  const YAML::Node found = self[key];
+  // yaml-cpp returns an invalid ("zombie") node for a missing key; use a plain undefined node.
+  if (!found.IsDefined()) return NodeReader(YAML::Node(YAML::NodeType::Undefined), child_path(path_, key), sink_);
+  return NodeReader(found, child_path(path_, key), sink_);
 }
 
 NodeReader NodeReader::required(const std::string& key) const {

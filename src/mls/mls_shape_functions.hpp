@@ -10,6 +10,10 @@
 
 namespace lamina::mls {
 
+namespace detail {
+struct MlsWorkspace;
+}
+
 /// Shape functions at one evaluation point. Columns follow `neighbours` (sorted ascending).
 /// dphi has 3 rows (x y z) and n columns if derivative_order >= 1, else 0 columns; ddphi has 6 rows
 /// (xx yy zz xy yz zx) and n columns if derivative_order >= 2, else 0 columns. Rows of unused
@@ -83,6 +87,10 @@ class MlsShapeFunctions {
   template <int Dim, Basis B>
   void evaluate_kernel(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
   bool node_centred() const;
+  /// Fills workspace.indices (sorted), .offsets (x - x_I) and .radii of the neighbours of x (x already
+  /// projected) with the radii multiplied by radius_factor / N = nearest_count; sets rho (basis scaling).
+  Index gather(const Vec3& x, Real radius_factor, Index nearest_count, detail::MlsWorkspace& workspace,
+               Vec3& rho) const;
   [[noreturn]] void throw_singular(const Vec3& x, Index neighbours, Real condition) const;
 
   PointMatrix nodes_;             // as given

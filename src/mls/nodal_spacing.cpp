@@ -11,10 +11,8 @@
 
 namespace lamina::mls {
 
-namespace {
-
-/// Mean spacing of a cloud from its bounding box: (volume of the non-flat axes / N)^(1/axes).
-Real mean_spacing(const PointMatrix& nodes, int dimension) {
+Real mean_nodal_spacing(const PointMatrix& nodes, int dimension) {
+  if (nodes.cols() == 0) return 0.0;
   const Vec3 extent = nodes.rowwise().maxCoeff() - nodes.rowwise().minCoeff();
   const Real largest = extent.head(dimension).maxCoeff();
   Real volume = 1.0;
@@ -29,15 +27,13 @@ Real mean_spacing(const PointMatrix& nodes, int dimension) {
   return std::pow(volume / static_cast<Real>(nodes.cols()), 1.0 / axes);
 }
 
-}  // namespace
-
 Eigen::Matrix3Xd estimate_nodal_spacing(const PointMatrix& nodes_in, int dimension) {
   if (dimension < 1 || dimension > 3)
     throw InputError("mls.dimension", "1, 2 or 3", std::to_string(dimension));
   const Index count = nodes_in.cols();
   PointMatrix nodes = nodes_in;
   nodes.bottomRows(3 - dimension).setZero();
-  const Real spacing = count >= 2 ? mean_spacing(nodes, dimension) : 0.0;
+  const Real spacing = count >= 2 ? mean_nodal_spacing(nodes, dimension) : 0.0;
   if (!(spacing > 0.0) || !std::isfinite(spacing))
     throw InputError("mls.nodes", "at least 2 distinct finite nodes to estimate the nodal spacing",
                      std::to_string(count) + " node(s)");

@@ -14,4 +14,8 @@ namespace lamina::mls {
 /// than 2 distinct nodes.
 Eigen::Matrix3Xd estimate_nodal_spacing(const PointMatrix& nodes, int dimension = 3);
 
+/// Mean spacing of a cloud from its bounding box: (volume of the non-flat axes / N)^(1/axes), using the
+/// first `dimension` coordinates; 0 if all nodes coincide.
+Real mean_nodal_spacing(const PointMatrix& nodes, int dimension = 3);
+
 }  // namespace lamina::mls
