@@ -34,6 +34,17 @@ struct GmshSession {
   GmshSession& operator=(const GmshSession&) = delete;
 };
 
+/// Elements of one type (fresh output vectors: Gmsh 4.8 does not reset reused ones).
+struct Elements {
+  std::vector<std::size_t> tags, nodes;
+  std::size_t nodes_per_element() const { return tags.empty() ? 0 : nodes.size() / tags.size(); }
+};
+Elements elements_of_type(int type) {
+  Elements e;
+  gmsh::model::mesh::getElementsByType(type, e.tags, e.nodes);
+  return e;
+}
+
 std::string last_gmsh_error() {
   std::string error;
   try {
@@ -121,23 +132,22 @@ ImportedMesh import_gmsh(const std::string& path) {
     };
 
     // Volumes from linear hexahedra and tetrahedra.
-    std::vector<std::size_t> element_tags, element_nodes;
-    gmsh::model::mesh::getElementsByType(5, element_tags, element_nodes);
-    out.has_hexahedra = !element_tags.empty();
-    for (std::size_t e = 0; e < element_tags.size(); ++e) {
+    const Elements hexahedra = elements_of_type(5);
+    out.has_hexahedra = !hexahedra.tags.empty();
+    for (std::size_t e = 0; e < hexahedra.tags.size(); ++e) {
       Eigen::Matrix<Real, 3, 8> x;
       std::array<Index, 8> ids{};
       for (int a = 0; a < 8; ++a) {
-        ids[a] = node(element_nodes[8 * e + a]);
+        ids[a] = node(hexahedra.nodes[8 * e + a]);
         x.col(a) = cloud.positions.col(ids[a]);
       }
       const Eigen::Matrix<Real, 8, 1> v = hexahedron_node_volumes(x);
       for (int a = 0; a < 8; ++a) cloud.volumes[ids[a]] += v[a];
     }
-    gmsh::model::mesh::getElementsByType(4, element_tags, element_nodes);
-    for (std::size_t e = 0; e < element_tags.size(); ++e) {
+    const Elements tetrahedra = elements_of_type(4);
+    for (std::size_t e = 0; e < tetrahedra.tags.size(); ++e) {
       std::array<Index, 4> ids{};
-      for (int a = 0; a < 4; ++a) ids[a] = node(element_nodes[4 * e + a]);
+      for (int a = 0; a < 4; ++a) ids[a] = node(tetrahedra.nodes[4 * e + a]);
       Mat3 edges;
       for (int a = 0; a < 3; ++a) edges.col(a) = cloud.positions.col(ids[a + 1]) - cloud.positions.col(ids[0]);
       const Real v = std::abs(edges.determinant()) / 6.0;
@@ -182,12 +192,10 @@ ImportedMesh import_gmsh(const std::string& path) {
     // Quadrilaterals -> shell elements on the nodes they use.
     std::vector<std::array<Index, 4>> quads;
     for (int type : {3, 10, 16}) {
-      gmsh::model::mesh::getElementsByType(type, element_tags, element_nodes);
-      if (element_tags.empty()) continue;
-      const std::size_t per = element_nodes.size() / element_tags.size();
-      for (std::size_t e = 0; e < element_tags.size(); ++e)
-        quads.push_back({node(element_nodes[per * e]), node(element_nodes[per * e + 1]), node(element_nodes[per * e + 2]),
-                         node(element_nodes[per * e + 3])});
+      const Elements q = elements_of_type(type);
+      const std::size_t per = q.nodes_per_element();
+      for (std::size_t e = 0; e < q.tags.size(); ++e)
+        quads.push_back({node(q.nodes[per * e]), node(q.nodes[per * e + 1]), node(q.nodes[per * e + 2]), node(q.nodes[per * e + 3])});
     }
     out.has_quads = !quads.empty();
     std::vector<Index> shell_index(static_cast<std::size_t>(count), -1);

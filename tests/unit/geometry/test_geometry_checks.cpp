@@ -73,7 +73,7 @@ TEST(AnalyticMeasures, VolumesAndAreas) {
   EXPECT_NEAR(body_volume(box_spec({0, 0, 0}, {2, 3, 4})), 24.0, 1e-12);
   EXPECT_NEAR(mid_surface_area(box_spec({0, 0, 0}, {2, 3, 0.5})), 6.0, 1e-12);
   EXPECT_NEAR(body_volume(plate_spec(0, 0, 2, 3, 0.1)), 0.6, 1e-12);
-  EXPECT_NEAR(body_volume(curved_beam_spec(1, 2, 90, 0, 1)), 0.25 * pi * 3 / 2 * 1, 1e-12);
+  EXPECT_NEAR(body_volume(curved_beam_spec(1, 2, 90, 0, 1)), 0.5 * (0.5 * pi) * 3 * 1, 1e-12);
   EXPECT_NEAR(mid_surface_area(curved_beam_spec(1, 2, 90, 0, 1)), 1.5 * 0.5 * pi, 1e-12);
   EXPECT_NEAR(body_volume(cylinder_spec(1, 2, 2, 0)), 2 * pi, 1e-12);
   EXPECT_NEAR(body_volume(cylinder_spec(1, 2, 2, 0.2)), pi * (1.1 * 1.1 - 0.9 * 0.9) * 2, 1e-12);

@@ -16,10 +16,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// A per-process scratch directory for the meshes written by the tests, removed at exit.
 fs::path scratch_dir() {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("lamina_geometry_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
+  struct Scratch {
+    fs::path dir = fs::path(::testing::TempDir()) / ("lamina_geometry_" + std::to_string(::getpid()));
+    Scratch() { fs::create_directories(dir); }
+    ~Scratch() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  };
+  static Scratch scratch;
+  return scratch.dir;
 }
 
 /// A 2 x 1 x 0.5 block of 4 x 2 x 2 hexahedra, physical groups: volume "body", the x = 0 face

@@ -98,7 +98,7 @@ std::vector<ShellCase> shell_cases() {
     cases.push_back(c);
   }
   {
-    ShellCase c{"sphere_cap_closed", sphere_cap_spec(1, 0.01, 0, 360), {4, 6}, 1 + 4 * 6, 1.0, [](const Vec3& x) { return x; }, {}};
+    ShellCase c{"sphere_cap_closed", sphere_cap_spec(1, 0.01, 0, 360), {6, 8}, 1 + 6 * 8, 1.0, [](const Vec3& x) { return x; }, {}};
     c.degenerate_pole = true;
     c.sets = {{"hole", [=](const Vec3& x) { return std::hypot(x.x(), x.y()) < kTol; }},
               {"base", [=](const Vec3& x) { return near(x.z(), 0, 1); }}};

@@ -229,7 +229,9 @@ TEST_P(VolumeNodes, SpacingPositiveAndBoundedByBody) {
     EXPECT_GT(cloud.spacing.col(i).maxCoeff(), 0.0) << i;
     EXPECT_GE(cloud.spacing.col(i).minCoeff(), 0.0) << i;
     for (int d = 0; d < 3; ++d)
-      if (extent[d] > 0 && c.counts[2] > 1) EXPECT_LE(cloud.spacing(d, i), extent[d] * (1 + 1e-12)) << i;
+      if (extent[d] > 0 && c.counts[2] > 1) {
+        EXPECT_LE(cloud.spacing(d, i), extent[d] * (1 + 1e-12)) << i;
+      }
   }
 }
 
@@ -264,6 +266,51 @@ TEST(VolumeNodes, CurvedNodeVolumesMatchTheirRings) {
   for (Index i = 0; i < cloud.size(); ++i)
     if (std::abs(cloud.parametric(0, i) - r) < 1e-12) ring += cloud.volumes[i];
   EXPECT_NEAR(ring, pi * ((r + dr / 2) * (r + dr / 2) - (r - dr / 2) * (r - dr / 2)) * 0.5, 1e-12);
+}
+
+TEST(VolumeNodes, ThroughThicknessLayersCarryTheirHalfOfTheWall) {
+  // With 2 nodes through the wall, the inner/outer layers carry exactly the inner/outer half of
+  // the wall (the whole-body sum cannot see a wrong split between them).
+  struct Case {
+    GeometrySpec spec;
+    std::array<int, 3> counts;
+    std::function<GeometrySpec(const GeometrySpec&, Real sign)> half;  // the half wall at sign * t/4
+  };
+  auto shifted = [](const GeometrySpec& s, Real sign) {
+    GeometrySpec h = s;
+    h.radius += sign * 0.25 * s.thickness;
+    h.thickness *= 0.5;
+    return h;
+  };
+  const std::vector<Case> cases = {
+      {cylinder_spec(1.0, 2.0, 2, 0.3), {2, 12, 2}, shifted},
+      {cylinder_spec(1.0, 2.0, 0, 0.3, 75), {2, 5, 2}, shifted},
+      {sphere_cap_spec(2.0, 0.4, 18, 360), {2, 6, 12}, shifted},
+      {sphere_cap_spec(2.0, 0.4, 0, 90), {2, 6, 4}, shifted},
+      {square_tube_spec(1.0, 2.0, 0.1, 0.2), {2, 24, 2},
+       [](const GeometrySpec& s, Real sign) {
+         GeometrySpec h = s;
+         h.width += sign * 0.5 * s.thickness;
+         h.corner_radius += sign * 0.25 * s.thickness;
+         h.thickness *= 0.5;
+         return h;
+       }},
+      {square_tube_spec(1.0, 2.0, 0.0, 0.2), {2, 12, 2},
+       [](const GeometrySpec& s, Real sign) {
+         GeometrySpec h = s;
+         h.width += sign * 0.5 * s.thickness;
+         h.thickness *= 0.5;
+         return h;
+       }},
+  };
+  for (const Case& c : cases) {
+    const PointCloud cloud = generate_volume_nodes(c.spec, c.counts);
+    for (const auto& [set, sign] : {std::pair<std::string, Real>{"inner", -1.0}, {"outer", 1.0}}) {
+      Real layer = 0;
+      for (Index i : cloud.sets.at(set)) layer += cloud.volumes[i];
+      EXPECT_NEAR(layer / body_volume(c.half(c.spec, sign)), 1.0, 1e-12) << to_string(c.spec.type) << " " << set;
+    }
+  }
 }
 
 TEST(VolumeNodes, SolidCylinderCentreCarriesTheInnerDisc) {
