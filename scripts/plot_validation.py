@@ -5,6 +5,7 @@ python3-matplotlib (Agg backend, no display needed)."""
 import csv
 import json
 import sys
+import textwrap
 
 import matplotlib
 
@@ -28,9 +29,22 @@ def read_csv(path):
     return columns
 
 
+def select_rows(columns, wanted):
+    """Keep the rows whose cells equal the wanted values (text comparison)."""
+    if not columns or not wanted:
+        return columns
+    count = len(next(iter(columns.values())))
+    keep = [i for i in range(count)
+            if all(str(columns.get(key, [""] * count)[i]) == value or
+                   (isinstance(columns.get(key, [None] * count)[i], float) and value.replace(".", "", 1).isdigit()
+                    and float(value) == columns[key][i]) for key, value in wanted.items())]
+    return {name: [values[i] for i in keep] for name, values in columns.items()}
+
+
 def draw(spec):
     lamina = read_csv(spec["lamina_csv"])
     reference = read_csv(spec["reference_csv"]) if spec.get("reference_csv") else {}
+    reference = select_rows(reference, spec.get("reference_row", {}))
     figure, axes = plt.subplots(figsize=(6.4, 4.4), dpi=120)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     x = lamina[spec["x"]]
@@ -54,7 +68,7 @@ def draw(spec):
     axes.set_ylabel(spec.get("ylabel") or ", ".join(spec["y"]))
     title = spec.get("title", "")
     if spec.get("reference_label"):
-        title += "\nreference: " + spec["reference_label"][:90]
+        title += "\n" + textwrap.shorten("reference: " + spec["reference_label"], width=95, placeholder=" ...")
     axes.set_title(title, fontsize=9)
     axes.grid(True, which="both", alpha=0.3)
     axes.legend(fontsize=8)

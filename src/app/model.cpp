@@ -70,6 +70,8 @@ void jitter_nodes(PointCloud& cloud, const io::Jitter& jitter, const geometry::G
 
 }  // namespace
 
+Model build_point_model_unlocated(const io::Case& c);
+
 IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& cloud) {
   IndexList nodes;
   try {
@@ -85,7 +87,36 @@ IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& clo
   return nodes;
 }
 
+namespace {
+
+/// Generator errors carry a key path but no position: point them at the case file.
+InputError locate(const InputError& e, const io::Case& c) {
+  std::vector<Diagnostic> located = e.diagnostics();
+  for (auto& d : located) {
+    if (!d.file.empty()) continue;
+    d.file = c.file;
+    if (d.key_path.rfind("geometry", 0) == 0) {
+      d.line = c.geometry_location.line;
+      d.column = c.geometry_location.column;
+    } else if (d.key_path.rfind("discretization", 0) == 0) {
+      d.line = c.discretization_location.line;
+      d.column = c.discretization_location.column;
+    }
+  }
+  return InputError(located);
+}
+
+}  // namespace
+
 Model build_point_model(const io::Case& c) {
+  try {
+    return build_point_model_unlocated(c);
+  } catch (const InputError& e) {
+    throw locate(e, c);
+  }
+}
+
+Model build_point_model_unlocated(const io::Case& c) {
   Model model;
   const auto& d = c.discretization;
   if (c.geometry.type == geometry::GeometryType::mesh) {

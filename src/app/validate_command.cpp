@@ -41,11 +41,13 @@ struct CheckSpec {
 struct PlotSpec {
   std::string x, reference_x, title, xlabel, ylabel;
   std::vector<std::string> y, reference_y;
+  std::map<std::string, std::string> reference_row;  // plot only reference rows with these column values
   bool log_x = false, log_y = false;
 };
 
 struct RunSpec {
   std::string name;
+  bool fast = true;  // part of --fast when its case is
   std::vector<std::string> overrides;
   std::string sweep_key, sweep_name;
   std::vector<std::string> sweep_values;
@@ -81,6 +83,7 @@ ValidationCase read_validation_case(const fs::path& directory) {
         if (!r.expect_map()) continue;
         RunSpec run;
         run.name = r.string("name", std::nullopt);
+        run.fast = r.boolean("fast", true);
         io::NodeReader set = r.child("set");
         if (set.defined() && set.expect_sequence())
           for (const auto& s : set.elements())
@@ -136,6 +139,11 @@ ValidationCase read_validation_case(const fs::path& directory) {
           p.title = plot.string("title", v.name + " / " + run.name);
           p.xlabel = plot.string("xlabel", p.x);
           p.ylabel = plot.string("ylabel", "");
+          io::NodeReader row = plot.child("reference_row");
+          if (row.defined() && row.expect_map()) {
+            for (const auto& key : row.keys()) p.reference_row[key] = row.string(key, std::nullopt);
+            row.reject_unknown_keys();
+          }
           p.log_x = plot.boolean("log_x", false);
           p.log_y = plot.boolean("log_y", false);
           plot.reject_unknown_keys();
@@ -264,6 +272,7 @@ int validate(const ValidateOptions& options) {
       for (const auto& comment : reference->comments) reference_source += (reference_source.empty() ? "" : " ") + comment;
     }
     for (const auto& run : v.runs) {
+      if (options.fast && !run.fast) continue;
       const auto start = std::chrono::steady_clock::now();
       Table lamina;
       std::string failure;
@@ -389,6 +398,7 @@ int validate(const ValidateOptions& options) {
         p["reference_csv"] = reference ? reference_path.string() : "";
         p["reference_x"] = run.plot->reference_x;
         p["reference_y"] = run.plot->reference_y;
+        p["reference_row"] = run.plot->reference_row;
         p["reference_label"] = reference_source;
         plots.push_back(p);
       }

@@ -101,6 +101,7 @@ struct Case {
   std::vector<MaterialEntry> materials;
   geometry::GeometrySpec geometry;
   SourceLocation geometry_location;
+  SourceLocation discretization_location;
   Discretization discretization;
   std::vector<BoundaryCondition> boundary;
   std::vector<Load> loads;

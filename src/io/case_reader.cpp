@@ -250,10 +250,6 @@ Case CaseReader::read() {
       if (m.has("where") && m.has("select")) m.error("either where or select, not both");
       if (m.has("where")) {
         NodeReader where = m.child("where");
-        YAML::Node wrapped(YAML::NodeType::Map);
-        wrapped["where"] = where.node();
-        NodeReader w(wrapped, where.path(), &where.sink());
-        // Report through the original node so positions point into the file.
         auto text = where.as_string();
         if (text) {
           try {
@@ -358,6 +354,8 @@ Case CaseReader::read() {
 
   // discretization
   NodeReader d = root.child("discretization");
+  c.discretization_location = location_of(d);
+  if (!d.defined()) c.discretization_location = location_of(root);
   if (d.defined() && d.expect_map()) {
     auto allowed = [&](const std::string& key) {
       return keys && std::find(keys->discretization_keys.begin(), keys->discretization_keys.end(), key) != keys->discretization_keys.end();
@@ -541,7 +539,7 @@ Case CaseReader::read() {
     o.reject_unknown_keys();
   }
 
-  c.imperfection = root.child("imperfection").node();
+  if (c.method == "pd") c.imperfection = root.child("imperfection").node();
   if (keys) c.method_section = root.child(c.method).node();
   return c;
 }
