@@ -68,7 +68,7 @@ def draw(spec):
     axes.set_ylabel(spec.get("ylabel") or ", ".join(spec["y"]))
     title = spec.get("title", "")
     if spec.get("reference_label"):
-        title += "\n" + textwrap.shorten("reference: " + spec["reference_label"], width=95, placeholder=" ...")
+        title += "\n" + textwrap.shorten("reference: " + spec["reference_label"], width=80, placeholder=" ...")
     axes.set_title(title, fontsize=9)
     axes.grid(True, which="both", alpha=0.3)
     axes.legend(fontsize=8)

@@ -1,5 +1,6 @@
 #include "app/method_registry.hpp"
 
+#include "app/efg_method.hpp"
 #include "app/mls_options_reader.hpp"
 #include "core/error.hpp"
 #include "efg/mls_fit_analysis.hpp"
@@ -39,6 +40,7 @@ std::unique_ptr<Analysis> create_mls_fit(const io::Case& c, const Model& model, 
 
 const std::vector<MethodEntry>& methods() {
   static const std::vector<MethodEntry> entries{
+      efg_method_entry(),
       MethodEntry{io::MethodKeys{"mls_fit", {"nodes", "jitter"}, false},
                   "MLS fit of an analytic field: errU, errDU, errDDU (seed 004 eqs 3-3..3-5)", read_mls_fit,
                   create_mls_fit},
@@ -53,7 +55,7 @@ const MethodEntry* find_method(const std::string& name) {
 }
 
 const std::vector<std::string>& planned_methods() {
-  static const std::vector<std::string> names{"efg", "pd", "mpm", "mpfem"};
+  static const std::vector<std::string> names{"pd", "mpm", "mpfem"};
   return names;
 }
 

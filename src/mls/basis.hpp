@@ -1,5 +1,5 @@
 #pragma once
-// Complete polynomial bases p(z) of the MLS approximation (seed 004, eq 1-4), linear or quadratic in
+// Complete polynomial bases p of the MLS approximation u^h = p^T A^-1 B u (seed 004), linear or quadratic in
 // 1, 2 or 3 dimensions, in scaled local coordinates z = (x - centre) / rho, with derivatives at z = 0.
 #include <array>
 
@@ -28,6 +28,22 @@ struct PolynomialBasis {
     if constexpr (Dim == 1) return {0, -1, -1};
     else if constexpr (Dim == 2) return {0, 1, 3};
     else return {0, 1, 2};
+  }
+
+  /// Exponents (of z_1, z_2, z_3) of term k.
+  static constexpr std::array<std::array<int, 3>, size> exponents() {
+    std::array<std::array<int, 3>, size> result{};
+    for (int d = 0; d < Dim; ++d) result[1 + d][d] = 1;
+    if constexpr (B == Basis::quadratic) {
+      for (int d = 0; d < Dim; ++d) result[1 + Dim + d][d] = 2;
+      if constexpr (Dim == 2) result[5] = {1, 1, 0};
+      if constexpr (Dim == 3) {
+        result[7] = {1, 1, 0};
+        result[8] = {0, 1, 1};
+        result[9] = {1, 0, 1};
+      }
+    }
+    return result;
   }
 
   /// Writes p(z) to out[0..size).
@@ -67,6 +83,41 @@ struct PolynomialBasis {
       }
     }
     return p;
+  }
+};
+
+/// The moment matrix A = sum_I w_I p_I p_I^T has only as many distinct entries as there are monomials
+/// of degree <= 2 * degree (35 instead of 55 for the 3D quadratic basis): entry (a, b) is the moment
+/// sum_I w_I z_I^(e_a + e_b). The plan lists, per distinct moment, one (row, column) pair computing it
+/// (smallest column first) and, per lower entry, which moment it is.
+template <int Dim, Basis B>
+struct MomentPlan {
+  using Polynomial = PolynomialBasis<Dim, B>;
+  static constexpr int size = Polynomial::size;
+  int count = 0;
+  std::array<int, size*(size + 1) / 2> row{};     // per moment: a
+  std::array<int, size*(size + 1) / 2> column{};  // per moment: b <= a
+  std::array<std::array<int, size>, size> moment_of{};  // [a][b], a >= b
+
+  static constexpr MomentPlan make() {
+    MomentPlan plan;
+    constexpr auto exponent = Polynomial::exponents();
+    std::array<int, 125> seen{};
+    for (auto& value : seen) value = -1;
+    for (int b = 0; b < size; ++b) {
+      for (int a = b; a < size; ++a) {
+        const int key = (exponent[a][0] + exponent[b][0]) + 5 * (exponent[a][1] + exponent[b][1]) +
+                        25 * (exponent[a][2] + exponent[b][2]);
+        if (seen[key] < 0) {
+          seen[key] = plan.count;
+          plan.row[plan.count] = a;
+          plan.column[plan.count] = b;
+          ++plan.count;
+        }
+        plan.moment_of[a][b] = seen[key];
+      }
+    }
+    return plan;
   }
 };
 

@@ -7,7 +7,7 @@
 
 namespace lamina::mls {
 
-/// Complete polynomial basis p(x) of eq 1-4: linear (m = d + 1) or quadratic (m = (d+1)(d+2)/2).
+/// Complete polynomial basis p(x) of u^h = p^T A^-1 B u: linear (m = d + 1) or quadratic (m = (d+1)(d+2)/2).
 enum class Basis { linear, quadratic };
 
 /// Weight function w(s), s = distance / support radius in [0, 1] (eqs 1-6, 1-7, 1-8).
@@ -24,6 +24,12 @@ enum class SupportShape { box, sphere };
 ///  all          node-centred, R_I = scale * (distance from node I to its N-th nearest other node) [ALL]
 ///  variable     point-centred: R(x) = scale * (distance from x to its N-th nearest node),
 ///               neighbours = every node inside that support (= the N nearest when scale = 1) [VARIABLE]
+/// Sphere supports use one radius; box supports use R_d per axis in kappa / fixed_radius modes and the
+/// same R on every axis in the other modes. Distances use the first `dimension` coordinates only.
+/// With scale = 1 the N-th nearest node lies just inside the support (radius times 1 + support_epsilon),
+/// so its weight is negligible (about 1e-27 for the quartic spline): choose N > m, or scale > 1.
+/// In the point-centred modes the derivatives are taken with R(x) held fixed (R(x) is only piecewise
+/// smooth), see MlsShapeFunctions.
 enum class SupportMode { kappa, fixed_radius, nearest, all, variable };
 
 /// Every radius is multiplied by (1 + support_epsilon) so that nodes lying exactly at kappa * h

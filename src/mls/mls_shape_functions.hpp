@@ -76,7 +76,7 @@ class MlsShapeFunctions {
   const MlsOptions& options() const { return options_; }
   /// Number of basis terms m.
   int basis_size() const { return basis_size_; }
-  /// Local nodal spacing h (3 x N; given or estimated; zero unless mode kappa).
+  /// Local nodal spacing h (3 x N; given or estimated in mode kappa; empty in the other modes).
   const Eigen::Matrix3Xd& nodal_spacing() const { return spacing_; }
   /// Support radii of the nodes (3 x N) in the node-centred modes kappa, fixed_radius and all,
   /// including the (1 + support_epsilon) factor; empty in the point-centred modes.
@@ -87,8 +87,9 @@ class MlsShapeFunctions {
   template <int Dim, Basis B>
   void evaluate_kernel(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
   bool node_centred() const;
-  /// Fills workspace.indices (sorted), .offsets (x - x_I) and .radii of the neighbours of x (x already
-  /// projected) with the radii multiplied by radius_factor / N = nearest_count; sets rho (basis scaling).
+  /// Fills workspace.indices (sorted), .offsets (x - x_I) and .inverse_radii of the neighbours of x
+  /// (x already projected), radii multiplied by radius_factor, N = nearest_count; sets rho (basis scale).
+  template <int Dim>
   Index gather(const Vec3& x, Real radius_factor, Index nearest_count, detail::MlsWorkspace& workspace,
                Vec3& rho) const;
   [[noreturn]] void throw_singular(const Vec3& x, Index neighbours, Real condition) const;
@@ -99,7 +100,7 @@ class MlsShapeFunctions {
   int basis_size_ = 0;
   Eigen::Matrix3Xd spacing_;
   Eigen::Matrix3Xd radii_;        // node-centred modes: per node and axis (original order)
-  Eigen::Matrix3Xd sorted_radii_; // same, in the cell list's order
+  Eigen::Matrix3Xd sorted_inverse_radii_;  // 1 / radii_ in the cell list's order (unused axes: 0)
   Vec3 max_radius_ = Vec3::Zero();
   CellList cells_;
 };

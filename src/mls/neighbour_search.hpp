@@ -1,6 +1,6 @@
 #pragma once
 // Uniform-bin cell list over a point set for box/sphere range queries and k-nearest queries; used to
-// find the nodes whose supports contain an evaluation point (MLS neighbours, seed 004 eq 1-9).
+// find the nodes whose supports contain an evaluation point (the MLS neighbours of seed 004).
 #include <utility>
 #include <vector>
 
@@ -44,6 +44,25 @@ class CellList {
         for (Index k = begin; k < end; ++k) visit(k);
       }
     }
+  }
+
+  /// Number of points for_each_candidate(low, high, ...) would visit (an upper bound for buffers).
+  Index count_candidates(const Vec3& low, const Vec3& high) const {
+    Index count = 0;
+    if (order_.empty()) return 0;
+    int first[3];
+    int last[3];
+    for (int d = 0; d < 3; ++d) {
+      if (high[d] < origin_[d] || low[d] > top_[d]) return 0;
+      first[d] = cell_coordinate(low[d], d);
+      last[d] = cell_coordinate(high[d], d);
+    }
+    for (int z = first[2]; z <= last[2]; ++z)
+      for (int y = first[1]; y <= last[1]; ++y) {
+        const Index row = (static_cast<Index>(z) * counts_[1] + y) * counts_[0];
+        count += cell_start_[row + last[0] + 1] - cell_start_[row + first[0]];
+      }
+    return count;
   }
 
   /// Indices of the points with low <= p <= high (componentwise), sorted ascending.

@@ -1,6 +1,6 @@
 #pragma once
 // Local nodal spacing h_I (one length per axis and node) that sizes the supports R_I,d = kappa h_I,d
-// of the default "kappa" support mode (seed 004, eq 1-9: "radius s + delta").
+// of the default "kappa" support mode (seed 004, OMLL supports: "radius s + delta").
 #include "core/types.hpp"
 
 namespace lamina::mls {

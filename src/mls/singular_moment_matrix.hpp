@@ -1,5 +1,5 @@
 #pragma once
-// Error raised when the MLS moment matrix A(x) (seed 004, eq 1-12) is singular or ill-conditioned at an
+// Error raised when the MLS moment matrix A(x) (seed 004, eqs 1-4..1-19) is singular or ill-conditioned at an
 // evaluation point (too few or badly placed neighbours for the basis; seed: SINCHECK).
 #include <string>
 

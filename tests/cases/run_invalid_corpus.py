@@ -9,6 +9,7 @@ Every DIR/*.yaml (or just the FILEs given) starts with comment lines stating the
     # expect-line: 7                     a stderr line contains "<file name>:7:" (file:LINE:COLUMN)
     # expect: materials.0.nu             substring that must appear in stderr (any number of these)
     # expect-min-errors: 3               at least 3 "error:" lines (one line per problem)
+    # expect-max-errors: 1               at most 1 "error:" line (no follow-on errors)
     # args: --set mls_fit.basis=cubic    extra command-line arguments (shell-style quoting)
 
 Other comment lines are free text. For each file the runner executes
@@ -39,7 +40,7 @@ MEMORY_LIMIT = 4 << 30  # address-space limit of each lamina process (a runaway 
 
 def parse_header(path):
     """The expectations in the leading comment block of a corpus file."""
-    spec = {"line": None, "expect": [], "args": [], "min_errors": 1}
+    spec = {"line": None, "expect": [], "args": [], "min_errors": 1, "max_errors": None}
     with open(path, "rb") as f:
         raw = f.read()
     for line in raw.decode("utf-8", errors="replace").splitlines():
@@ -57,6 +58,8 @@ def parse_header(path):
             spec["args"] += shlex.split(value)
         elif key == "expect-min-errors":
             spec["min_errors"] = int(value)
+        elif key == "expect-max-errors":
+            spec["max_errors"] = int(value)
     return spec
 
 
@@ -116,6 +119,8 @@ def check_output(spec, name, code, err):
     error_lines = [l for l in err.splitlines() if l.startswith("error:")]
     if len(error_lines) < spec["min_errors"]:
         problems.append(f"{len(error_lines)} 'error:' line(s), expected at least {spec['min_errors']}")
+    if spec["max_errors"] is not None and len(error_lines) > spec["max_errors"]:
+        problems.append(f"{len(error_lines)} 'error:' lines, expected at most {spec['max_errors']} (follow-on errors)")
     if spec["line"] is not None:
         pattern = re.compile(re.escape(name) + ":" + str(spec["line"]) + r":")
         if not any(pattern.search(l) for l in err.splitlines()):

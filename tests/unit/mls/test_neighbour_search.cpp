@@ -89,7 +89,9 @@ IndexList brute_force_neighbours(const MlsShapeFunctions& shape_functions, const
     if (box) {
       for (int d = 0; d < dimension; ++d) inside = inside && std::abs(offset[d]) < radius[d];
     } else {
-      inside = offset.head(dimension).norm() < radius[0];
+      Real squared = 0.0;
+      for (int d = 0; d < dimension; ++d) squared += offset[d] * offset[d];
+      inside = std::sqrt(squared) < radius[0];
     }
     if (inside) result.push_back(i);
   }

@@ -1,0 +1,197 @@
+#include "app/efg_method.hpp"
+
+#include <fmt/format.h>
+
+#include "app/mls_options_reader.hpp"
+#include "core/error.hpp"
+#include "efg/efg_analysis.hpp"
+
+namespace lamina::app {
+
+namespace {
+
+struct EfgMethodOptions : MethodOptions {
+  efg::EfgOptions options;
+};
+
+efg::Region make_region(const io::Selection& s, const IndexList& nodes, const std::string& label) {
+  efg::Region r;
+  r.spec = s.spec;
+  r.nodes = nodes;
+  r.label = label;
+  return r;
+}
+
+std::unique_ptr<MethodOptions> read_efg(const io::Case&, const io::NodeReader& section) {
+  auto result = std::make_unique<EfgMethodOptions>();
+  result->options = read_efg_options(section);
+  return result;
+}
+
+std::unique_ptr<Analysis> create_efg(const io::Case& c, const Model& model, const MethodOptions& options) {
+  const auto& o = static_cast<const EfgMethodOptions&>(options);
+  return std::make_unique<efg::EfgAnalysis>(make_efg_problem(c, model, o.options), model.probes);
+}
+
+}  // namespace
+
+efg::EfgOptions read_efg_options(const io::NodeReader& section) {
+  efg::EfgOptions o;
+  if (!section.defined()) {
+    o.mls.dimension = 3;
+    return o;  // all defaults
+  }
+  if (!section.expect_map()) return o;
+  const std::string formulation =
+      section.word("formulation", {"galerkin", "collocation", "weighted_least_squares"}, "galerkin");
+  if (formulation != "galerkin")
+    section.child("formulation")
+        .error("formulation: galerkin (collocation and weighted_least_squares are not implemented in this build yet)",
+               formulation);
+  o.mls = read_mls_options(section, 3);
+
+  io::NodeReader integration = section.child("integration");
+  if (integration.defined() && integration.expect_map()) {
+    io::NodeReader cells = integration.child("cells");
+    if (cells.defined()) {
+      if (auto v = cells.as_integers(3)) {
+        std::array<int, 3> counts{};
+        bool ok = true;
+        for (int d = 0; d < 3; ++d) {
+          if ((*v)[static_cast<std::size_t>(d)] < 1 || (*v)[static_cast<std::size_t>(d)] > 100000) ok = false;
+          counts[static_cast<std::size_t>(d)] = static_cast<int>((*v)[static_cast<std::size_t>(d)]);
+        }
+        if (ok) o.cells = counts;
+        else cells.error("three cell counts between 1 and 100000");
+      }
+    }
+    io::NodeReader gauss = integration.child("gauss");
+    if (gauss.defined()) {
+      if (gauss.is_sequence()) {
+        if (auto v = gauss.as_integers(3)) {
+          bool ok = true;
+          for (int d = 0; d < 3; ++d) {
+            if ((*v)[static_cast<std::size_t>(d)] < 1 || (*v)[static_cast<std::size_t>(d)] > 20) ok = false;
+            o.gauss[static_cast<std::size_t>(d)] = static_cast<int>((*v)[static_cast<std::size_t>(d)]);
+          }
+          if (!ok) gauss.error("Gauss orders between 1 and 20");
+        }
+      } else {
+        const int g = static_cast<int>(integration.integer("gauss", 2, 1, 20));
+        o.gauss = {g, g, g};
+      }
+    }
+    const std::string volumetric = integration.word("volumetric", {"full", "reduced"}, "full");
+    o.reduced_volumetric = volumetric == "reduced";
+    for (int d = 0; d < 3; ++d) o.volumetric_gauss[static_cast<std::size_t>(d)] = std::max(o.gauss[static_cast<std::size_t>(d)] - 1, 1);
+    if (integration.has("volumetric_gauss")) {
+      const int g = static_cast<int>(integration.integer("volumetric_gauss", 1, 1, 20));
+      o.volumetric_gauss = {g, g, g};
+    }
+    const std::string correction = integration.word("correction", {"none", "vci"}, "none");
+    o.correction = correction == "vci" ? efg::IntegrationCorrection::vci : efg::IntegrationCorrection::none;
+    integration.reject_unknown_keys();
+  }
+  const std::string bc = section.word("essential_bc", {"penalty", "penalty_nodes", "nitsche", "lagrange"}, "penalty");
+  o.essential = bc == "nitsche"         ? efg::EssentialMethod::nitsche
+                : bc == "lagrange"      ? efg::EssentialMethod::lagrange
+                : bc == "penalty_nodes" ? efg::EssentialMethod::penalty_nodes
+                                        : efg::EssentialMethod::penalty;
+  if (section.has("penalty")) o.penalty = section.real("penalty", std::nullopt, 0.0, INFINITY, true);
+  o.penalty_factor = section.real("penalty_factor", 1e5, 0.0, 1e16, true);
+  io::NodeReader nitsche = section.child("nitsche");
+  if (nitsche.defined() && nitsche.expect_map()) {
+    o.nitsche_factor = nitsche.real("factor", 100.0, 0.0, 1e12, true);
+    nitsche.reject_unknown_keys();
+  }
+  io::NodeReader exact = section.child("exact_displacement");
+  if (exact.defined()) {
+    if (exact.is_sequence() && exact.node().size() == 3) {
+      std::array<std::string, 3> e;
+      const auto items = exact.elements();
+      for (std::size_t i = 0; i < 3; ++i) {
+        geometry::ScalarField f = io::read_scalar_field(items[i]);
+        e[i] = f.is_constant() ? fmt::format("{:.17g}", f.constant) : f.expression;
+      }
+      o.exact_displacement = e;
+    } else {
+      exact.error("three expressions [ux, uy, uz] of x, y, z");
+    }
+  }
+  section.reject_unknown_keys();
+  return o;
+}
+
+efg::EfgProblem make_efg_problem(const io::Case& c, const Model& model, const efg::EfgOptions& options) {
+  efg::EfgProblem p;
+  p.geometry = c.geometry;
+  p.cloud = model.cloud;
+  p.options = options;
+  std::vector<Diagnostic> problems;
+  auto problem_at = [&](const io::SourceLocation& where, const std::string& key, const std::string& expected,
+                        const std::string& found) {
+    problems.push_back(Diagnostic{where.file, where.line, where.column, where.key_path + key, expected, found});
+  };
+  for (std::size_t i = 0; i < c.materials.size(); ++i) {
+    const auto& m = c.materials[i];
+    io::SourceLocation where{c.file, 0, 0, fmt::format("materials.{}", i)};
+    if (m.spec.model != material::MaterialModel::linear_elastic) {
+      problem_at(where, ".model", "linear_elastic (efg is a linear analysis)", "another model");
+      continue;
+    }
+    efg::EfgMaterial em;
+    em.name = m.spec.name;
+    em.elastic = material::LinearElastic{m.spec.E, m.spec.nu};
+    if (m.select) em.region = make_region(*m.select, model.material_nodes[i], fmt::format("materials.{}.select", i));
+    p.materials.push_back(em);
+  }
+  for (std::size_t i = 0; i < c.boundary.size(); ++i) {
+    const auto& b = c.boundary[i];
+    if (b.velocity[0] || b.velocity[1] || b.velocity[2]) {
+      problem_at(b.location, ".velocity", "fix, symmetry or displacement (velocity is for explicit methods)", "velocity");
+      continue;
+    }
+    efg::EssentialCondition e;
+    e.region = make_region(b.select, model.boundary_nodes[i], fmt::format("boundary.{}", i));
+    for (int a = 0; a < 3; ++a) {
+      if (b.fixed[static_cast<std::size_t>(a)]) e.constrained[static_cast<std::size_t>(a)] = true;
+      if (b.displacement[static_cast<std::size_t>(a)]) {
+        e.constrained[static_cast<std::size_t>(a)] = true;
+        e.value[static_cast<std::size_t>(a)] = *b.displacement[static_cast<std::size_t>(a)];
+      }
+    }
+    if (!e.constrained[0] && !e.constrained[1] && !e.constrained[2]) {
+      problem_at(b.location, ".fix", "translations x, y or z (a 3D continuum has no rotational degrees of freedom)",
+                 "only rotations");
+      continue;
+    }
+    p.constraints.push_back(e);
+  }
+  for (std::size_t i = 0; i < c.loads.size(); ++i) {
+    const auto& l = c.loads[i];
+    efg::EfgLoad load;
+    load.region = make_region(l.select, model.load_nodes[i], fmt::format("loads.{}", i));
+    load.vector = l.vector;
+    load.scalar = l.scalar;
+    switch (l.kind) {
+      case io::Load::Kind::force: load.kind = efg::EfgLoad::Kind::force; break;
+      case io::Load::Kind::traction: load.kind = efg::EfgLoad::Kind::traction; break;
+      case io::Load::Kind::pressure: load.kind = efg::EfgLoad::Kind::pressure; break;
+      case io::Load::Kind::body_force: load.kind = efg::EfgLoad::Kind::body_force; break;
+      default:
+        problem_at(l.location, "", "force, traction, pressure or body_force (efg is a static analysis)",
+                   "mass or initial_velocity");
+        continue;
+    }
+    p.loads.push_back(load);
+  }
+  if (!problems.empty()) throw InputError(problems);
+  return p;
+}
+
+MethodEntry efg_method_entry() {
+  return MethodEntry{io::MethodKeys{"efg", {"nodes", "jitter"}, true},
+                     "Galerkin element-free analysis, 3D linear elastostatics (seed 004)", read_efg, create_efg};
+}
+
+}  // namespace lamina::app

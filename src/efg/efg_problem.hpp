@@ -1,0 +1,81 @@
+#pragma once
+// The EFG method family's own description of a linear elastostatic problem (no io types: the
+// application translates the case file into this). Selections stay geometric (where / box /
+// set / nearest / all) so that they can be tested at quadrature points, and carry the node
+// indices they selected on the node cloud.
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/point_cloud.hpp"
+#include "core/probe.hpp"
+#include "geometry/expression.hpp"
+#include "geometry/geometry_spec.hpp"
+#include "geometry/selection.hpp"
+#include "material/linear_elastic.hpp"
+#include "mls/mls_options.hpp"
+
+namespace lamina::efg {
+
+/// A selection of the case: its geometric definition and the nodes it selected.
+struct Region {
+  geometry::SelectionSpec spec;   // kind all / where / box / set / nearest
+  IndexList nodes;                // resolved on the node cloud (non-empty)
+  std::string label;              // for messages, e.g. "boundary.0"
+};
+
+struct EfgMaterial {
+  std::string name;
+  material::LinearElastic elastic;
+  std::optional<Region> region;   // none = everywhere
+};
+
+/// Prescribed displacement components on a region (fix = value 0).
+struct EssentialCondition {
+  Region region;
+  std::array<bool, 3> constrained{false, false, false};
+  std::array<geometry::ScalarField, 3> value;  // prescribed u_i (constant or expression of x y z t)
+};
+
+struct EfgLoad {
+  enum class Kind { force, traction, pressure, body_force };
+  Kind kind = Kind::force;
+  Region region;
+  std::array<geometry::ScalarField, 3> vector;  // force (total), traction (per area), body force (per volume)
+  geometry::ScalarField scalar;                 // pressure (per area, positive pushes inwards)
+};
+
+/// How essential boundary conditions are imposed (see essential_boundary.hpp).
+enum class EssentialMethod { penalty, penalty_nodes, nitsche, lagrange };
+
+/// Correction of the quadrature for linear exactness (see galerkin_assembly.hpp).
+enum class IntegrationCorrection { none, vci };
+
+struct EfgOptions {
+  mls::MlsOptions mls;
+  std::optional<std::array<int, 3>> cells;      // background cells per parametric axis (none: from the nodes)
+  std::array<int, 3> gauss{2, 2, 2};            // Gauss points per cell and direction
+  IntegrationCorrection correction = IntegrationCorrection::none;
+  bool reduced_volumetric = false;              // selective reduced integration of the lambda term
+  std::array<int, 3> volumetric_gauss{1, 1, 1}; // its Gauss order (default: gauss - 1, at least 1)
+  EssentialMethod essential = EssentialMethod::penalty;
+  std::optional<Real> penalty;                  // absolute penalty value (none: penalty_factor x stiffness scale)
+  Real penalty_factor = 1e5;
+  Real nitsche_factor = 100.0;                  // beta = factor * (lambda + 2 mu) / h
+  /// Optional exact displacement (expressions of x y z) for verification: builtin error probes.
+  std::optional<std::array<std::string, 3>> exact_displacement;
+};
+
+struct EfgProblem {
+  geometry::GeometrySpec geometry;
+  PointCloud cloud;
+  std::vector<EfgMaterial> materials;
+  std::vector<EssentialCondition> constraints;
+  std::vector<EfgLoad> loads;
+  EfgOptions options;
+};
+
+std::string to_string(EssentialMethod method);
+
+}  // namespace lamina::efg

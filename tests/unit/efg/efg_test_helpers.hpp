@@ -1,0 +1,97 @@
+#pragma once
+// Helpers for the EFG unit tests: small problems built directly as efg::EfgProblem.
+#include <string>
+
+#include "efg/efg_analysis.hpp"
+#include "geometry/generators.hpp"
+#include "geometry/selection.hpp"
+
+namespace lamina::efg::testing {
+
+inline geometry::GeometrySpec box(const Vec3& lo, const Vec3& hi) {
+  geometry::GeometrySpec g;
+  g.type = geometry::GeometryType::box;
+  g.min = lo;
+  g.max = hi;
+  return g;
+}
+
+inline Region where(const std::string& expression, const PointCloud& cloud) {
+  Region r;
+  r.spec.kind = geometry::SelectionSpec::Kind::where;
+  r.spec.expression = expression;
+  r.nodes = geometry::resolve_selection(r.spec, cloud.positions, cloud.sets);
+  r.label = expression;
+  return r;
+}
+
+inline Region set(const std::string& name, const PointCloud& cloud) {
+  Region r;
+  r.spec.kind = geometry::SelectionSpec::Kind::set;
+  r.spec.set_name = name;
+  r.nodes = geometry::resolve_selection(r.spec, cloud.positions, cloud.sets);
+  r.label = name;
+  return r;
+}
+
+inline geometry::ScalarField field(const std::string& expression) {
+  geometry::ScalarField f;
+  f.expression = expression;
+  return f;
+}
+
+inline geometry::ScalarField constant(Real value) {
+  geometry::ScalarField f;
+  f.constant = value;
+  return f;
+}
+
+/// A body with nodes and one material, no conditions yet.
+inline EfgProblem make_problem(const geometry::GeometrySpec& g, const std::array<int, 3>& nodes, Real E, Real nu) {
+  EfgProblem p;
+  p.geometry = g;
+  p.cloud = geometry::generate_volume_nodes(g, nodes);
+  EfgMaterial m;
+  m.name = "solid";
+  m.elastic = material::LinearElastic{E, nu};
+  p.materials.push_back(m);
+  p.options.mls.dimension = 3;
+  return p;
+}
+
+/// Linear patch-test field used by several tests.
+inline const std::array<std::string, 3>& linear_field() {
+  static const std::array<std::string, 3> f{"1e-3*(1 + 2*x + 3*y + 4*z)", "1e-3*(2 - x + 2*y + z)",
+                                            "1e-3*(-1 + 3*x - 2*y + 0.5*z)"};
+  return f;
+}
+
+inline Vec3 linear_field_at(const Vec3& x) {
+  return 1e-3 * Vec3(1 + 2 * x[0] + 3 * x[1] + 4 * x[2], 2 - x[0] + 2 * x[1] + x[2], -1 + 3 * x[0] - 2 * x[1] + 0.5 * x[2]);
+}
+
+/// Unit cube with the linear field prescribed on the whole boundary.
+inline EfgProblem patch_problem(int n, Real jitter) {
+  EfgProblem p = make_problem(box(Vec3::Zero(), Vec3::Ones()), {n, n, n}, 1.0, 0.25);
+  if (jitter > 0) {
+    // deterministic perturbation of the interior nodes
+    for (Index i = 0; i < p.cloud.size(); ++i) {
+      Vec3 x = p.cloud.positions.col(i);
+      bool interior = true;
+      for (int d = 0; d < 3; ++d)
+        if (x[d] < 1e-9 || x[d] > 1 - 1e-9) interior = false;
+      if (!interior) continue;
+      const Real h = 1.0 / (n - 1);
+      x += jitter * h * Vec3(std::sin(12.9898 * i), std::sin(78.233 * i + 1), std::sin(37.719 * i + 2));
+      p.cloud.positions.col(i) = x;
+    }
+  }
+  EssentialCondition c;
+  c.region = where("x < 1e-9 or x > 1 - 1e-9 or y < 1e-9 or y > 1 - 1e-9 or z < 1e-9 or z > 1 - 1e-9", p.cloud);
+  c.constrained = {true, true, true};
+  for (int a = 0; a < 3; ++a) c.value[static_cast<std::size_t>(a)] = field(linear_field()[static_cast<std::size_t>(a)]);
+  p.constraints.push_back(c);
+  return p;
+}
+
+}  // namespace lamina::efg::testing

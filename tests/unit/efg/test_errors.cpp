@@ -1,0 +1,97 @@
+// Bad EFG input stops with an InputError (exit 2) or AnalysisError (exit 3) and a message that
+// says what to change; nothing returns NaN.
+#include <gtest/gtest.h>
+
+#include "core/error.hpp"
+#include "efg_test_helpers.hpp"
+
+namespace lamina::efg {
+namespace {
+
+using namespace testing;
+
+EfgProblem cantilever() {
+  EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(4, 1, 1)), {9, 3, 3}, 1e4, 0.3);
+  EssentialCondition clamp;
+  clamp.region = set("xmin", p.cloud);
+  clamp.constrained = {true, true, true};
+  p.constraints.push_back(clamp);
+  EfgLoad load;
+  load.kind = EfgLoad::Kind::traction;
+  load.region = set("xmax", p.cloud);
+  load.vector = {constant(0.0), constant(-1.0), constant(0.0)};
+  p.loads.push_back(load);
+  p.options.mls.basis = mls::Basis::quadratic;
+  p.options.mls.kappa = 2.5;
+  return p;
+}
+
+TEST(EfgErrors, CantileverRunsAndIsFinite) {
+  EfgAnalysis a(cantilever(), {});
+  a.solve();
+  EXPECT_TRUE(a.nodal_parameters().allFinite());
+  EXPECT_LT(a.displacement_at(Vec3(4, 0.5, 0.5))[1], 0.0);
+}
+
+TEST(EfgErrors, SupportTooSmallForTheBasisIsAnInputError) {
+  EfgProblem p = cantilever();
+  p.options.mls.kappa = 1.5;  // three nodes per direction are needed for a quadratic basis
+  EfgAnalysis a(p, {});
+  try {
+    a.solve();
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("efg.support"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("kappa"), std::string::npos) << e.what();
+  }
+}
+
+TEST(EfgErrors, FreeRigidBodyModeIsAnAnalysisError) {
+  EfgProblem p = cantilever();
+  p.constraints[0].constrained = {true, false, false};  // y and z translations free
+  EfgAnalysis a(p, {});
+  EXPECT_THROW(a.solve(), AnalysisError);
+}
+
+TEST(EfgErrors, NodeOutsideTheBodyIsAnInputError) {
+  EfgProblem p = cantilever();
+  p.cloud.positions(0, 5) = 7.0;
+  EfgAnalysis a(p, {});
+  EXPECT_THROW(a.solve(), InputError);
+}
+
+TEST(EfgErrors, TractionOnNoSurfaceIsAnInputError) {
+  EfgProblem p = cantilever();
+  p.loads[0].region = where("x > 1.9 and x < 2.1 and y > 0.4 and y < 0.6 and z > 0.4 and z < 0.6", p.cloud);
+  ASSERT_FALSE(p.loads[0].region.nodes.empty());
+  EfgAnalysis a(p, {});
+  EXPECT_THROW(a.solve(), InputError);
+}
+
+TEST(EfgErrors, UncoveredMaterialRegionIsAnInputError) {
+  EfgProblem p = cantilever();
+  p.materials[0].region = where("x < 2", p.cloud);
+  EfgAnalysis a(p, {});
+  EXPECT_THROW(a.solve(), InputError);
+}
+
+TEST(EfgErrors, UnsupportedProbeIsRejectedUpFront) {
+  Probe probe;
+  probe.name = "v";
+  probe.field = "velocity";
+  probe.component = "x";
+  probe.at = Vec3::Zero();
+  EXPECT_THROW(EfgAnalysis(cantilever(), {probe}), InputError);
+}
+
+TEST(EfgErrors, NearlyIncompressibleMaterialRunsWithoutNaN) {
+  EfgProblem p = cantilever();
+  p.materials[0].elastic.nu = 0.4999;
+  p.options.reduced_volumetric = true;
+  EfgAnalysis a(p, {});
+  a.solve();
+  EXPECT_TRUE(a.nodal_parameters().allFinite());
+}
+
+}  // namespace
+}  // namespace lamina::efg
