@@ -50,9 +50,17 @@ def draw(spec):
     x = lamina[spec["x"]]
     for index, name in enumerate(spec["y"]):
         colour = colours[index % len(colours)]
-        pairs = sorted(zip(x, lamina[name]))
-        axes.plot([p[0] for p in pairs], [p[1] for p in pairs], "-", color=colour, label=f"lamina {name}")
-        if index < len(spec.get("reference_y", [])) and reference:
+        values = lamina[name]
+        if spec.get("relative_error_to") is not None:  # convergence plot: |y / exact - 1|
+            exact = spec["relative_error_to"]
+            values = [abs(v / exact - 1.0) for v in values]
+        pairs = sorted(zip(x, values))
+        if spec.get("relative_error_to") is not None:
+            axes.plot([p[0] for p in pairs], [p[1] for p in pairs], "-s", color=colour, markersize=4,
+                      label=f"lamina |{name} / {spec['relative_error_to']:g} - 1|")
+        else:
+            axes.plot([p[0] for p in pairs], [p[1] for p in pairs], "-", color=colour, label=f"lamina {name}")
+        if index < len(spec.get("reference_y", [])) and reference and spec.get("relative_error_to") is None:
             ref_name = spec["reference_y"][index]
             ref_x = reference.get(spec.get("reference_x") or spec["x"], [])
             ref_y = reference.get(ref_name, [])

@@ -43,6 +43,7 @@ struct PlotSpec {
   std::vector<std::string> y, reference_y;
   std::map<std::string, std::string> reference_row;  // plot only reference rows with these column values
   bool log_x = false, log_y = false;
+  std::optional<Real> relative_error_to;  // plot |y / value - 1| instead of y (convergence plots)
 };
 
 struct RunSpec {
@@ -146,6 +147,7 @@ ValidationCase read_validation_case(const fs::path& directory) {
           }
           p.log_x = plot.boolean("log_x", false);
           p.log_y = plot.boolean("log_y", false);
+          if (plot.has("relative_error_to")) p.relative_error_to = plot.real("relative_error_to", 0.0);
           plot.reject_unknown_keys();
           run.plot = p;
         }
@@ -261,6 +263,14 @@ int validate(const ValidateOptions& options) {
   std::vector<CheckRow> table;
   nlohmann::json plots = nlohmann::json::array();
   std::map<std::string, std::string> descriptions;
+  std::map<std::string, std::vector<std::string>> sweep_labels;  // "case/run" -> swept values as written
+  struct SweepTable {
+    std::string case_name, run_name, key;
+    Table table;
+    std::vector<std::string> quantities;  // shown in the report's convergence table
+    std::optional<Real> exact;            // relative errors against this value
+  };
+  std::vector<SweepTable> sweep_tables;
 
   for (const auto& v : cases) {
     descriptions[v.name] = v.title + (v.description.empty() ? "" : ". " + v.description);
@@ -292,16 +302,25 @@ int validate(const ValidateOptions& options) {
       };
       nlohmann::json final_probes;
       if (!run.sweep_key.empty()) {
-        lamina.columns.push_back(run.sweep_name);
-        for (const auto& value : run.sweep_values) {
+        // columns: the swept value (its level 1, 2, ... when it is not a number), nodes, dofs, probes
+        lamina.columns = {run.sweep_name, "level", "nodes", "dofs"};
+        const std::size_t fixed_columns = lamina.columns.size();
+        for (std::size_t level = 0; level < run.sweep_values.size(); ++level) {
+          const std::string& value = run.sweep_values[level];
           auto overrides = run.overrides;
           overrides.push_back(run.sweep_key + "=" + value);
-          auto r = run_once(overrides, out / v.name / fmt::format("{}_{}", run.name, value));
+          std::string folder = fmt::format("{}_{}", run.name, level + 1);
+          auto r = run_once(overrides, out / v.name / folder);
           if (!r) break;
-          if (lamina.columns.size() == 1)
+          if (lamina.columns.size() == fixed_columns)
             for (auto it = r->summary["probes"].begin(); it != r->summary["probes"].end(); ++it) lamina.columns.push_back(it.key());
-          std::vector<Real> row{std::stod(value)};
-          for (std::size_t c = 1; c < lamina.columns.size(); ++c) row.push_back(r->summary["probes"][lamina.columns[c]].get<Real>());
+          char* end = nullptr;
+          const Real numeric = std::strtod(value.c_str(), &end);
+          const bool is_number = end && *end == '\0' && !value.empty();
+          std::vector<Real> row{is_number ? numeric : Real(level + 1), Real(level + 1),
+                                r->summary["counts"].value("nodes", Real(0)), r->summary["counts"].value("dofs", Real(0))};
+          sweep_labels[v.name + "/" + run.name].push_back(value);
+          for (std::size_t c = fixed_columns; c < lamina.columns.size(); ++c) row.push_back(r->summary["probes"][lamina.columns[c]].get<Real>());
           lamina.rows.push_back(row);
           final_probes = r->summary["probes"];
         }
@@ -384,6 +403,15 @@ int validate(const ValidateOptions& options) {
         table.push_back(row);
       }
 
+      if (!run.sweep_key.empty() && !lamina.rows.empty()) {
+        SweepTable st{v.name, run.name, run.sweep_key, lamina, {}, std::nullopt};
+        if (run.plot) st.quantities = run.plot->y, st.exact = run.plot->relative_error_to;
+        for (const auto& check : run.checks)
+          if (std::find(st.quantities.begin(), st.quantities.end(), check.quantity) == st.quantities.end())
+            st.quantities.push_back(check.quantity);
+        sweep_tables.push_back(st);
+      }
+
       if (run.plot && !lamina.rows.empty()) {
         nlohmann::json p;
         p["png"] = (out / fmt::format("{}_{}.png", v.name, run.name)).string();
@@ -392,6 +420,7 @@ int validate(const ValidateOptions& options) {
         p["ylabel"] = run.plot->ylabel;
         p["log_x"] = run.plot->log_x;
         p["log_y"] = run.plot->log_y;
+        if (run.plot->relative_error_to) p["relative_error_to"] = *run.plot->relative_error_to;
         p["lamina_csv"] = (out / fmt::format("{}_{}.csv", v.name, run.name)).string();
         p["x"] = run.plot->x;
         p["y"] = run.plot->y;
@@ -448,6 +477,29 @@ int validate(const ValidateOptions& options) {
       const std::string png = p["png"].get<std::string>();
       if (fs::path(png).filename().string().rfind(v.name + "_", 0) == 0 && fs::exists(png))
         report << fmt::format("![{}]({})\n\n", p["title"].get<std::string>(), fs::path(png).filename().string());
+    }
+    for (const auto& st : sweep_tables) {
+      if (st.case_name != v.name) continue;
+      const auto& labels = sweep_labels[st.case_name + "/" + st.run_name];
+      report << fmt::format("Convergence, run `{}` (swept `{}`):\n\n| {} | nodes | dofs |", st.run_name, st.key,
+                            st.table.columns[0]);
+      for (const auto& q : st.quantities) report << " " << q << " |" << (st.exact ? " rel. error |" : "");
+      report << "\n|---|---|---|";
+      for (std::size_t i = 0; i < st.quantities.size(); ++i) report << (st.exact ? "---|---|" : "---|");
+      report << "\n";
+      for (std::size_t r = 0; r < st.table.rows.size(); ++r) {
+        const auto& row = st.table.rows[r];
+        report << fmt::format("| {} | {} | {} |", r < labels.size() ? labels[r] : number(row[0]), number(row[2]),
+                              number(row[3]));
+        for (const auto& q : st.quantities) {
+          const int c = st.table.column(q);
+          const Real value = c >= 0 ? row[c] : NAN;
+          report << " " << number(value) << " |";
+          if (st.exact) report << fmt::format(" {:.3g} % |", 100.0 * std::abs(value / *st.exact - 1.0));
+        }
+        report << "\n";
+      }
+      report << "\n";
     }
     if (fs::exists(readme)) report << fmt::format("Case description: `validation/{}/README.md`.\n\n", v.name);
   }
