@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Install exactly the Debian 12 packages lamina needs to build, test and validate.
 # Idempotent: packages already present are skipped; apt is only called when something is missing.
+#   scripts/install-deps.sh           build, test and validation dependencies
+#   scripts/install-deps.sh --peers   also the side-by-side benchmark peers (bench/README.md):
+#                                     CalculiX (calculix-ccx), LAMMPS (lammps), OpenBLAS for CHOLMOD
 set -euo pipefail
 
 PACKAGES=(
@@ -11,6 +14,9 @@ PACKAGES=(
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy python3-vtk9
 )
+if [ "${1:-}" = "--peers" ]; then
+  PACKAGES+=(calculix-ccx lammps libopenblas0-openmp)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
