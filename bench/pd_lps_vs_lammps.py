@@ -1,0 +1,152 @@
+#!/usr/bin/python3
+"""Side-by-side benchmark: lamina's explicit LPS peridynamics against LAMMPS `pair_style peri/lps`.
+
+Same cubic lattice (n^3 particles, spacing a = 1 mm), same horizon (3.015 a), same material
+(E = 70 GPa, nu = 0.25), same number of steps, same number of threads (lamina, OpenMP) or ranks
+(LAMMPS, MPI; Debian's LAMMPS has no OpenMP package). Each code starts from a small random
+velocity field so that bonds deform.
+
+Figure: bond-updates per second = (directed bonds i->j within the horizon) x steps / loop time,
+where loop time is the time of the time-step loop only (LAMMPS "Loop time"; lamina's
+`stage_explicit_loop_s`), i.e. without reading the input or building the neighbour lists.
+
+Usage: bench/pd_lps_vs_lammps.py [--lamina build/lamina] [--n 51] [--steps 20] [--threads 1 2]
+Ends with one `BENCH <name> <value> <unit>` line per figure (ratios lamina / LAMMPS included).
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SPACING = 1.0e-3
+HORIZON_FACTOR = 3.015
+E, NU, DENSITY = 70.0e9, 0.25, 2700.0
+
+
+def directed_bonds(n):
+    """Number of ordered pairs (i, j), i != j, of an n^3 simple cubic lattice within the horizon."""
+    reach = int(HORIZON_FACTOR)
+    total = 0
+    for dx in range(-reach, reach + 1):
+        for dy in range(-reach, reach + 1):
+            for dz in range(-reach, reach + 1):
+                if (dx, dy, dz) == (0, 0, 0) or dx * dx + dy * dy + dz * dz > HORIZON_FACTOR ** 2:
+                    continue
+                total += (n - abs(dx)) * (n - abs(dy)) * (n - abs(dz))
+    return total
+
+
+def run_lammps(n, steps, ranks, workdir):
+    bulk = E / (3 * (1 - 2 * NU))
+    shear = E / (2 * (1 + NU))
+    deck = f"""units si
+boundary s s s
+atom_style peri
+atom_modify map array
+lattice sc {SPACING}
+region box block 0 {n - 1} 0 {n - 1} 0 {n - 1}
+create_box 1 box
+create_atoms 1 region box
+pair_style peri/lps
+pair_coeff * * {bulk:.6e} {shear:.6e} {HORIZON_FACTOR * SPACING:.6e} 10.0 0.0
+set group all density {DENSITY}
+set group all volume {SPACING ** 3:.6e}
+velocity all create 1.0e-3 87287 dist gaussian mom yes
+fix 1 all nve
+neighbor {0.5 * SPACING} bin
+neigh_modify every 100000 delay 100000 check no
+timestep 1.0e-8
+thermo {steps}
+run {steps}
+"""
+    path = os.path.join(workdir, f"in_{n}_{ranks}.lps")
+    with open(path, "w") as f:
+        f.write(deck)
+    log = os.path.join(workdir, f"log_{n}_{ranks}.lammps")
+    cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), "lmp", "-in", path, "-log", log,
+           "-screen", "none"]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    subprocess.run(cmd, check=True, env=env, cwd=workdir, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+    text = open(log).read()
+    m = re.search(r"Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
+    if not m:
+        raise RuntimeError("no loop time in the LAMMPS log " + log)
+    return {"loop_s": float(m.group(1)), "atoms": int(m.group(4))}
+
+
+def run_lamina(lamina, n, steps, threads, workdir):
+    """lamina explicit run on the same lattice; the case is written here from PRODUCT.md's keys."""
+    extent = n * SPACING  # nodes at cell centres: n cells of size a per direction
+    wave_speed = (E / DENSITY) ** 0.5
+    case = f"""title: LPS cube for the LAMMPS side-by-side benchmark
+method: pd
+materials: [{{name: m, model: linear_elastic, E: {E}, nu: {NU}, density: {DENSITY}}}]
+geometry: {{type: box, min: [0, 0, 0], max: [{extent}, {extent}, {extent}]}}
+discretization: {{spacing: [{SPACING}, {SPACING}, {SPACING}], horizon_factor: {HORIZON_FACTOR}}}
+pd:
+  influence: one
+  surface_correction: none
+  analysis: explicit
+  explicit: {{steps: {steps}, time_step: 1.0e-8, random_velocity: 1.0e-3}}
+output: {{vtu: false}}
+"""
+    path = os.path.join(workdir, f"lamina_{n}_{threads}.yaml")
+    with open(path, "w") as f:
+        f.write(case)
+    out = os.path.join(workdir, f"lamina_{n}_{threads}")
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    subprocess.run([lamina, "run", path, "-o", out], check=True, env=env, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    timing = summary["timing"]
+    return {"loop_s": timing["stage_explicit_loop_s"], "atoms": summary["counts"]["nodes"],
+            "bytes_per_particle": timing.get("stage_bytes_per_particle"),
+            "bytes_per_bond": timing.get("stage_bytes_per_bond")}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lamina", default=os.path.join(ROOT, "build", "lamina"))
+    parser.add_argument("--n", type=int, default=51, help="particles per direction (51^3 = 132,651)")
+    parser.add_argument("--steps", type=int, default=20)
+    parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    args = parser.parse_args()
+    if shutil.which("lmp") is None:
+        sys.exit("lmp not found: scripts/install-deps.sh --peers")
+    workdir = tempfile.mkdtemp(prefix="lamina_bench_lps_")
+    bonds = directed_bonds(args.n)
+    print(f"lattice {args.n}^3 = {args.n ** 3} particles, {bonds} directed bonds "
+          f"({bonds / args.n ** 3:.1f} per particle), {args.steps} steps", flush=True)
+    bench = []
+    for threads in args.threads:
+        lmp = run_lammps(args.n, args.steps, threads, workdir)
+        lam = run_lamina(args.lamina, args.n, args.steps, threads, workdir)
+        if lmp["atoms"] != args.n ** 3 or lam["atoms"] != args.n ** 3:
+            print(f"  warning: particle counts LAMMPS {lmp['atoms']}, lamina {lam['atoms']}")
+        rate_lmp = bonds * args.steps / lmp["loop_s"]
+        rate_lam = bonds * args.steps / lam["loop_s"]
+        print(f"  {threads} thread(s)/rank(s): LAMMPS {lmp['loop_s']:.3f} s ({rate_lmp:.3g} bond-updates/s), "
+              f"lamina {lam['loop_s']:.3f} s ({rate_lam:.3g} bond-updates/s), ratio {rate_lam / rate_lmp:.2f}",
+              flush=True)
+        bench += [(f"pd_lps_lammps_{threads}proc_bond_updates_per_s", rate_lmp, "bond_updates/s"),
+                  (f"pd_lps_lamina_{threads}thread_bond_updates_per_s", rate_lam, "bond_updates/s"),
+                  (f"pd_lps_speedup_lamina_over_lammps_{threads}", rate_lam / rate_lmp, "ratio")]
+        if lam.get("bytes_per_particle"):
+            bench += [("pd_memory_per_particle", lam["bytes_per_particle"], "bytes"),
+                      ("pd_memory_per_bond", lam["bytes_per_bond"], "bytes")]
+    shutil.rmtree(workdir, ignore_errors=True)
+    seen = set()
+    for name, value, unit in bench:
+        if name in seen:
+            continue
+        seen.add(name)
+        print(f"BENCH {name} {value:.6g} {unit}")
+
+
+if __name__ == "__main__":
+    main()
