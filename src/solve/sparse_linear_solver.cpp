@@ -91,6 +91,7 @@ Eigen::VectorXd solve_symmetric(const SparseMatrix& upper, const Eigen::VectorXd
   if (!options.force_fallback) {
     auto start = std::chrono::steady_clock::now();
     CholmodLlt llt;
+    llt.cholmod().print = 0;  // lamina reports a failed factorisation itself, in one line
     llt.compute(upper);
     report.factor_seconds = seconds_since(start);
     if (llt.info() == Eigen::Success) {
