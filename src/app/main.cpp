@@ -1,6 +1,7 @@
 // lamina — meshfree and particle analysis of thin-walled structures. Command-line entry point:
 //   lamina run CASE.yaml [-o OUTDIR] [--threads N] [--set key.path=value ...] [--quiet]
 //   lamina check CASE.yaml [--set ...]
+//   lamina convert DECK.omll                     (an OMLL macro deck as a lamina case, docs/omll.md)
 //   lamina validate [NAME ...] [-o DIR] [--fast]
 //   lamina info
 #include <CLI/CLI.hpp>
@@ -14,6 +15,7 @@
 #include "app/validate_command.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
+#include "io/omll_deck.hpp"
 
 namespace {
 
@@ -27,7 +29,8 @@ int info() {
                            lamina::version, lamina::build_type, omp_get_max_threads());
   std::cout << "methods:\n";
   for (const auto& m : lamina::app::methods()) std::cout << fmt::format("  {:<8} {}\n", m.keys.method, m.summary);
-  for (const auto& name : lamina::app::planned_methods()) std::cout << fmt::format("  {:<8} (not implemented yet)\n", name);
+  for (const auto& name : lamina::app::planned_methods())
+    if (!lamina::app::find_method(name)) std::cout << fmt::format("  {:<8} (not implemented yet)\n", name);
   std::cout << "features: yaml case files, --set overrides, VTU/PVD output, Gmsh .msh import, muParser expressions,\n"
                "          MLS shape functions (linear/quadratic, gauss/cubic/quartic spline, box/sphere/nearest/all/variable)\n";
   return 0;
@@ -42,7 +45,7 @@ int main(int argc, char** argv) {
 
   lamina::app::RunOptions run_options;
   auto* run = cli.add_subcommand("run", "run a case file and write its results");
-  run->add_option("case", run_options.case_path, "case file (YAML)")->required();
+  run->add_option("case", run_options.case_path, "case file (YAML), or an OMLL deck (*.omll)")->required();
   run->add_option("-o,--output", run_options.output_directory, "output folder (default out/<case stem>)");
   run->add_option("--threads", run_options.threads, "OpenMP threads (default: all)")->check(CLI::NonNegativeNumber);
   run->add_option("--set", run_options.overrides, "override a case value: key.path=value")->take_all();
@@ -51,8 +54,13 @@ int main(int argc, char** argv) {
   std::string check_path;
   std::vector<std::string> check_overrides;
   auto* check = cli.add_subcommand("check", "validate a case file and print it resolved");
-  check->add_option("case", check_path, "case file (YAML)")->required();
+  check->add_option("case", check_path, "case file (YAML), or an OMLL deck (*.omll)")->required();
   check->add_option("--set", check_overrides, "override a case value: key.path=value")->take_all();
+
+  std::string convert_path;
+  auto* convert = cli.add_subcommand(
+      "convert", "print an OMLL macro deck (seed 004, *.omll) as the equivalent lamina case YAML (docs/omll.md)");
+  convert->add_option("deck", convert_path, "OMLL deck (*.omll)")->required();
 
   lamina::app::ValidateOptions validate_options;
   auto* validate = cli.add_subcommand("validate", "run the validation suite and write a report");
@@ -87,6 +95,13 @@ int main(int argc, char** argv) {
       return result.exit_code;
     }
     if (*check) return lamina::app::check_case(check_path, check_overrides);
+    if (*convert) {
+      if (!lamina::io::is_omll_deck(convert_path))
+        throw lamina::InputError(lamina::Diagnostic{convert_path, 0, 0, "<file>", "an OMLL deck (*.omll)",
+                                                    "'" + convert_path + "'"});
+      std::cout << lamina::io::omll_case_yaml(lamina::io::read_omll_deck(convert_path), convert_path);
+      return 0;
+    }
     if (*validate) return lamina::app::validate(validate_options);
     if (*info_command) return info();
   } catch (const lamina::InputError& e) {

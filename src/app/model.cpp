@@ -11,6 +11,8 @@
 #include "geometry/generators.hpp"
 #include "geometry/gmsh_import.hpp"
 #include "geometry/selection.hpp"
+#include "pd/cell_lattice.hpp"
+#include "io/yaml_reader.hpp"
 
 namespace lamina::app {
 
@@ -20,9 +22,18 @@ Diagnostic diagnostic_at(const io::SourceLocation& location, const std::string& 
   return Diagnostic{location.file, location.line, location.column, location.key_path, expected, found};
 }
 
+/// Nodes at given positions; each carries an equal share of the body's volume.
+PointCloud cloud_of(const std::vector<Vec3>& points, const geometry::GeometrySpec& spec) {
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) cloud.positions.col(static_cast<Index>(i)) = points[i];
+  const Real volume = spec.type == geometry::GeometryType::mesh ? 0.0 : geometry::body_volume(spec);
+  cloud.volumes = Eigen::VectorXd::Constant(cloud.size(), volume / static_cast<Real>(cloud.size()));
+  return cloud;
+}
+
 PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec& spec) {
   std::ifstream in(path);
-  PointCloud cloud;
   std::vector<Vec3> points;
   std::string line;
   int line_number = 0;
@@ -40,11 +51,7 @@ PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec&
     points.push_back(p);
   }
   if (points.empty()) throw InputError(Diagnostic{path, 0, 0, "discretization.nodes.file", "at least one node", "none"});
-  cloud.positions.resize(3, static_cast<Index>(points.size()));
-  for (std::size_t i = 0; i < points.size(); ++i) cloud.positions.col(static_cast<Index>(i)) = points[i];
-  const Real volume = spec.type == geometry::GeometryType::mesh ? 0.0 : geometry::body_volume(spec);
-  cloud.volumes = Eigen::VectorXd::Constant(cloud.size(), volume / static_cast<Real>(cloud.size()));
-  return cloud;
+  return cloud_of(points, spec);
 }
 
 /// Random perturbation of the nodes by up to `amount` local spacings per direction; nodes keep
@@ -89,13 +96,27 @@ IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& clo
 
 namespace {
 
-/// Generator errors carry a key path but no position: point them at the case file.
+}  // namespace
+
 InputError locate(const InputError& e, const io::Case& c) {
   std::vector<Diagnostic> located = e.diagnostics();
   for (auto& d : located) {
     if (!d.file.empty()) continue;
     d.file = c.file;
-    if (d.key_path.rfind("geometry", 0) == 0) {
+    std::optional<std::pair<int, int>> position;
+    if (!d.key_path.empty()) position = io::position_of(c.resolved, d.key_path);
+    if (!position) {
+      // a case built in code (OMLL deck): the recorded position of the key or its nearest ancestor
+      for (std::string path = d.key_path; !path.empty() && !position;) {
+        if (auto it = c.source_positions.find(path); it != c.source_positions.end()) position = it->second;
+        const auto dot = path.rfind('.');
+        path = dot == std::string::npos ? std::string() : path.substr(0, dot);
+      }
+    }
+    if (position) {
+      d.line = position->first;
+      d.column = position->second;
+    } else if (d.key_path.rfind("geometry", 0) == 0) {
       d.line = c.geometry_location.line;
       d.column = c.geometry_location.column;
     } else if (d.key_path.rfind("discretization", 0) == 0) {
@@ -103,10 +124,9 @@ InputError locate(const InputError& e, const io::Case& c) {
       d.column = c.discretization_location.column;
     }
   }
+  io::sort_by_position(located);
   return InputError(located);
 }
-
-}  // namespace
 
 Model build_point_model(const io::Case& c) {
   try {
@@ -119,15 +139,38 @@ Model build_point_model(const io::Case& c) {
 Model build_point_model_unlocated(const io::Case& c) {
   Model model;
   const auto& d = c.discretization;
-  if (c.geometry.type == geometry::GeometryType::mesh) {
+  if (d.elements || c.method == "mpm") {
+    // shell methods: the mid-surface quadrilateral mesh; its nodes and edge sets are the cloud
+    model.shell = geometry::generate_shell_mesh(c.geometry, d.elements.value_or(std::array<int, 2>{1, 1}));
+    model.cloud.positions = model.shell->nodes;
+    model.cloud.sets = model.shell->sets;
+    model.cloud.volumes = Eigen::VectorXd::Constant(model.cloud.size(), model.shell->area() * model.shell->thickness /
+                                                                            static_cast<Real>(std::max<Index>(model.cloud.size(), 1)));
+  } else if (c.geometry.type == geometry::GeometryType::mesh) {
     model.cloud = geometry::import_gmsh(c.geometry.file).cloud;
   } else if (d.nodes_file) {
     model.cloud = read_nodes_csv(*d.nodes_file, c.geometry);
+  } else if (d.node_coordinates) {
+    model.cloud = cloud_of(*d.node_coordinates, c.geometry);
+  } else if (d.spacing) {  // pd: cell-centred lattice over a box or plate
+    const auto& g = c.geometry;
+    if (g.type != geometry::GeometryType::box && g.type != geometry::GeometryType::plate)
+      throw InputError(Diagnostic{c.file, c.geometry_location.line, 0, "geometry.type",
+                                  "box or plate (a lattice from discretization.spacing)", geometry::to_string(g.type)});
+    const bool plate = g.type == geometry::GeometryType::plate;
+    const Vec3 lower = plate ? Vec3(g.min.x(), g.min.y(), -0.5 * g.thickness) : g.min;
+    const Vec3 upper = plate ? Vec3(g.max.x(), g.max.y(), 0.5 * g.thickness) : g.max;
+    model.cloud = pd::lattice_point_cloud(pd::make_cell_lattice(lower, upper, *d.spacing), plate);
   } else if (d.nodes) {
     model.cloud = geometry::generate_volume_nodes(c.geometry, *d.nodes);
+  } else if (d.particles) {  // 2D particle methods (mpfem): one layer in the generator's third direction
+    model.cloud = geometry::generate_volume_nodes(c.geometry, {(*d.particles)[0], (*d.particles)[1], 1});
+  } else if (d.particles_file) {
+    model.cloud = read_nodes_csv(*d.particles_file, c.geometry);
   } else {
-    throw InputError(Diagnostic{c.file, c.geometry_location.line, 0, "discretization.nodes",
-                                "node counts [nx, ny, nz] or {file: nodes.csv}", "nothing"});
+    // reported where the key is missing: the discretization mapping, or the document's root
+    throw InputError(Diagnostic{c.file, c.discretization_location.line, c.discretization_location.column,
+                                "discretization.nodes", "node counts [nx, ny, nz] or {file: nodes.csv}", "nothing"});
   }
   if (d.jitter && d.jitter->amount > 0) jitter_nodes(model.cloud, *d.jitter, c.geometry);
 

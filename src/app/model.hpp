@@ -1,26 +1,35 @@
 #pragma once
 // The discretised body a method works on: nodes/particles generated from the case's geometry
 // and discretization, with every selection of the case resolved to node indices.
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/point_cloud.hpp"
+#include "core/error.hpp"
 #include "core/probe.hpp"
+#include "core/shell_mesh.hpp"
 #include "io/case.hpp"
 
 namespace lamina::app {
 
 struct Model {
   PointCloud cloud;
+  std::optional<ShellMesh> shell;         // shell methods (mpm): the mid-surface mesh; cloud = its nodes
   std::vector<IndexList> boundary_nodes;  // per case.boundary entry
   std::vector<IndexList> load_nodes;      // per case.loads entry
   std::vector<IndexList> material_nodes;  // per case.materials entry (all nodes when unassigned)
   std::vector<Probe> probes;              // resolved probes, in case order
 };
 
-/// Generate nodes from geometry + discretization.nodes (+ jitter, or a nodes file) and resolve
+/// Generate nodes from geometry + discretization.nodes (or, with discretization.elements or method
+/// mpm, the shell mid-surface mesh whose nodes become the cloud) (+ jitter, or a nodes file) and resolve
 /// all selections. Empty selections and unknown sets are input errors (exit 2).
 Model build_point_model(const io::Case& c);
+
+/// Give the diagnostics that carry a key path but no file (generators, method set-up) the
+/// case file and the line:column of that key (or of its nearest ancestor), in line order.
+InputError locate(const InputError& e, const io::Case& c);
 
 /// Resolve one selection against a point cloud, throwing InputError at the selection's
 /// file position if it is empty or invalid.

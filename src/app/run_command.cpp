@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/case_reader.hpp"
+#include "io/omll_deck.hpp"
 #include "io/result_set.hpp"
 
 namespace lamina::app {
@@ -95,21 +96,56 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-PreparedCase prepare_case(const std::string& path, const std::vector<std::string>& overrides) {
-  std::vector<io::MethodKeys> keys = method_keys();
-  for (const auto& name : planned_methods()) keys.push_back(io::MethodKeys{name, {}, true});
-  io::CaseReader reader(path, overrides, keys);
+namespace {
+
+/// The case keys of a method that is part of the product (PRODUCT.md section 5) but not
+/// registered in this build: read like the others, so that only the method line is an error.
+io::MethodKeys planned_method_keys(const std::string& name) {
+  if (name == "pd") return io::MethodKeys{name, {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}};
+  if (name == "mpm") return io::MethodKeys{name, {"elements", "grid"}, true, {"shell"}};
+  if (name == "mpfem") return io::MethodKeys{name, {"particles", "jitter"}, true};
+  return io::MethodKeys{name, {}, true};
+}
+
+std::string implemented_method_names() {
+  std::string names;
+  for (const auto& m : methods()) names += (names.empty() ? "" : ", ") + m.keys.method;
+  return names;
+}
+
+PreparedCase prepare(io::CaseReader& reader) {
   PreparedCase prepared;
   prepared.case_data = reader.read();
   prepared.method = find_method(prepared.case_data.method);
   if (!prepared.method && !prepared.case_data.method.empty()) {
-    reader.sink().report(reader.method_section(prepared.case_data.method).node(), "method",
-                         "a method available in this build (mls_fit); efg, pd, mpm and mpfem are not implemented yet",
-                         "'" + prepared.case_data.method + "'");
+    const std::string& name = prepared.case_data.method;
+    reader.top_level("method").error(
+        fmt::format("a method implemented in this build ({}); '{}' is part of the product but not implemented yet",
+                    implemented_method_names(), name),
+        "'" + name + "'");
   }
   if (prepared.method) prepared.options = prepared.method->read_options(prepared.case_data, reader.method_section(prepared.case_data.method));
   reader.finish();
   return prepared;
+}
+
+}  // namespace
+
+std::vector<io::MethodKeys> all_method_keys() {
+  std::vector<io::MethodKeys> keys = method_keys();
+  for (const auto& name : planned_methods())
+    if (!find_method(name)) keys.push_back(planned_method_keys(name));
+  return keys;
+}
+
+PreparedCase prepare_case(const std::string& path, const std::vector<std::string>& overrides) {
+  if (io::is_omll_deck(path)) {
+    io::OmllCase deck = io::read_omll_deck(path);  // deck errors: InputError with deck lines
+    io::CaseReader reader(path, deck.document, deck.positions, overrides, all_method_keys());
+    return prepare(reader);
+  }
+  io::CaseReader reader(path, overrides, all_method_keys());
+  return prepare(reader);
 }
 
 RunResult run_case(const RunOptions& options) {
@@ -133,7 +169,7 @@ RunResult run_case(const RunOptions& options) {
     analysis = prepared.method->create(c, model, *prepared.options);
   } catch (const InputError& e) {
     result.exit_code = 2;
-    result.error = e.what();
+    result.error = locate(e, c).what();  // method set-up errors name a key: give its line
     return result;
   }
   const double setup_seconds = seconds_since(start);
@@ -163,7 +199,7 @@ RunResult run_case(const RunOptions& options) {
     summary["status"] = "ok";
   } catch (const InputError& e) {
     result.exit_code = 2;
-    result.error = e.what();
+    result.error = locate(e, c).what();
     return result;  // nothing committed: the staging folder is removed
   } catch (const AnalysisError& e) {
     result.exit_code = 3;

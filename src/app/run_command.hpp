@@ -28,7 +28,12 @@ struct PreparedCase {
   std::unique_ptr<MethodOptions> options;
 };
 
+/// The case keys of every method name a case may give: those of this build, and the planned
+/// ones (PRODUCT.md section 5) so that their cases are read without false errors.
+std::vector<io::MethodKeys> all_method_keys();
+
 /// Read + validate everything that can be checked without running (throws InputError).
+/// `path` is a YAML case, or an OMLL macro deck (*.omll, io/omll_deck.hpp) converted on the fly.
 PreparedCase prepare_case(const std::string& path, const std::vector<std::string>& overrides);
 
 struct RunResult {

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,6 +79,7 @@ struct Jitter {
 struct Discretization {
   std::optional<std::array<int, 3>> nodes;       // efg, mls_fit
   std::optional<std::string> nodes_file;         // CSV x,y,z
+  std::optional<std::vector<Vec3>> node_coordinates;  // nodes: {coordinates: [[x,y,z], ...]}
   std::optional<Jitter> jitter;
   std::optional<Vec3> spacing;                   // pd
   std::optional<Real> horizon, horizon_factor;   // pd
@@ -110,6 +112,8 @@ struct Case {
   YAML::Node method_section;   // the `<method>:` mapping (may be undefined)
   YAML::Node imperfection;     // pd
   YAML::Node resolved;         // the whole document after --set overrides (for check / log)
+  /// A case built in code (OMLL deck): key path -> line, column in `file` (io/omll_deck.hpp).
+  std::map<std::string, std::pair<int, int>> source_positions;
 };
 
 }  // namespace lamina::io

@@ -6,6 +6,8 @@
 #include <regex>
 #include <set>
 
+#include "geometry/generators.hpp"
+
 namespace lamina::io {
 
 using geometry::GeometryType;
@@ -19,6 +21,9 @@ SourceLocation location_of(const NodeReader& reader) {
   if (reader.node().IsDefined() && reader.node().Mark().line >= 0) {
     location.line = reader.node().Mark().line + 1;
     location.column = reader.node().Mark().column + 1;
+  } else if (auto position = reader.sink().source_position(reader.path())) {
+    location.line = position->first;  // a case built in code (OMLL deck): the recorded position
+    location.column = position->second;
   }
   return location;
 }
@@ -91,10 +96,13 @@ std::optional<Selection> read_selection(const NodeReader& reader) {
     selection.spec.kind = SelectionSpec::Kind::box;
     NodeReader box = reader.child("box");
     if (box.expect_map()) {
+      const std::size_t problems_before = reader.sink().diagnostics().size();
       selection.spec.box_min = box.vec3("min", std::nullopt);
       selection.spec.box_max = box.vec3("max", std::nullopt);
+      const bool read_cleanly = reader.sink().diagnostics().size() == problems_before;
+      if (!read_cleanly) ok = false;
       box.reject_unknown_keys();
-      if ((selection.spec.box_min.array() > selection.spec.box_max.array()).any())
+      if (read_cleanly && (selection.spec.box_min.array() > selection.spec.box_max.array()).any())
         box.error("min <= max in every component", "min > max");
     } else ok = false;
   } else if (reader.has("set")) {
@@ -191,6 +199,18 @@ CaseReader::CaseReader(const std::string& path, const std::vector<std::string>& 
     : path_(path), methods_(std::move(methods)), sink_(std::make_unique<DiagnosticSink>(path)) {
   document_ = load_yaml_file(path, *sink_);
   sink_->throw_if_any();
+  apply_overrides(overrides);
+}
+
+CaseReader::CaseReader(const std::string& path, YAML::Node document,
+                       std::map<std::string, std::pair<int, int>> positions, const std::vector<std::string>& overrides,
+                       std::vector<MethodKeys> methods)
+    : path_(path), methods_(std::move(methods)), sink_(std::make_unique<DiagnosticSink>(path)), document_(std::move(document)) {
+  sink_->set_source_positions(std::move(positions));
+  apply_overrides(overrides);
+}
+
+void CaseReader::apply_overrides(const std::vector<std::string>& overrides) {
   if (!document_.IsDefined() || document_.IsNull()) document_ = YAML::Node(YAML::NodeType::Map);
   for (const auto& assignment : overrides) {
     if (!document_.IsMap()) break;
@@ -202,6 +222,13 @@ CaseReader::CaseReader(const std::string& path, const std::vector<std::string>& 
 NodeReader CaseReader::method_section(const std::string& name) { return root_->child(name); }
 
 void CaseReader::finish() {
+  if (!method_known_) {
+    // Without a valid method its sections cannot be judged: no follow-on "unknown key" errors.
+    for (const auto& m : methods_) {
+      (void)root_->child(m.method);
+      for (const auto& other : m.other_sections) (void)root_->child(other);
+    }
+  }
   root_->reject_unknown_keys();
   sink_->throw_if_any();
 }
@@ -211,6 +238,7 @@ Case CaseReader::read() {
   c.file = path_;
   c.stem = std::filesystem::path(path_).stem().string();
   c.resolved = document_;
+  c.source_positions = sink_->source_positions();
   const NodeReader& root = *root_;
   if (!root.expect_map()) {
     sink_->throw_if_any();
@@ -224,6 +252,9 @@ Case CaseReader::read() {
   const MethodKeys* keys = nullptr;
   for (const auto& m : methods_)
     if (m.method == c.method) keys = &m;
+  method_known_ = keys != nullptr;
+  if (keys)
+    for (const auto& other : keys->other_sections) (void)root.child(other);
 
   // materials
   NodeReader materials = root.child("materials");
@@ -275,9 +306,14 @@ Case CaseReader::read() {
   }
 
   // geometry
+  bool geometry_clean = false;  // geometry read without problems (c.geometry holds the user's values)
   NodeReader g = root.required("geometry");
   c.geometry_location = location_of(g);
   if (g.defined() && g.expect_map()) {
+    // Cross-checks between values (max > min ...) only when every value read cleanly, never
+    // against the defaults that stand in for a bad or missing value.
+    const std::size_t problems_before = sink_->diagnostics().size();
+    auto read_cleanly = [&] { return sink_->diagnostics().size() == problems_before; };
     const std::string type =
         g.word("type", {"box", "plate", "curved_beam", "cylinder", "sphere_cap", "annulus", "square_tube", "mesh"}, std::nullopt);
     auto& s = c.geometry;
@@ -286,7 +322,7 @@ Case CaseReader::read() {
       s.type = GeometryType::box;
       s.min = g.vec3("min", std::nullopt);
       s.max = g.vec3("max", std::nullopt);
-      if ((s.max.array() <= s.min.array()).any()) g.child("max").error("max > min in every component",
+      if (read_cleanly() && (s.max.array() <= s.min.array()).any()) g.child("max").error("max > min in every component",
           fmt::format("[{}, {}, {}]", s.max.x(), s.max.y(), s.max.z()));
     } else if (type == "plate") {
       s.type = GeometryType::plate;
@@ -295,19 +331,20 @@ Case CaseReader::read() {
       if (lo && hi) {
         s.min = Vec3((*lo)[0], (*lo)[1], -0.5 * s.thickness);
         s.max = Vec3((*hi)[0], (*hi)[1], 0.5 * s.thickness);
-        if ((*hi)[0] <= (*lo)[0] || (*hi)[1] <= (*lo)[1]) g.child("max").error("max > min in x and y");
+        if (read_cleanly() && ((*hi)[0] <= (*lo)[0] || (*hi)[1] <= (*lo)[1])) g.child("max").error("max > min in x and y");
       }
     } else if (type == "curved_beam") {
       s.type = GeometryType::curved_beam;
       s.inner_radius = g.real("inner_radius", std::nullopt, 0.0, inf, true);
       s.outer_radius = g.real("outer_radius", std::nullopt, 0.0, inf, true);
-      s.angle_deg = g.real("angle", std::nullopt, 0.0, 360.0, true);
+      // a full ring is an annulus: the generator needs a sector below 360 degrees
+      s.angle_deg = g.real("angle", std::nullopt, 0.0, 360.0, true, true);
       auto z = g.required("z").as_reals(2);
       if (z) {
         s.z_range = {(*z)[0], (*z)[1]};
         if ((*z)[1] <= (*z)[0]) g.child("z").error("[z0, z1] with z1 > z0");
       }
-      if (s.outer_radius <= s.inner_radius) g.child("outer_radius").error("outer_radius > inner_radius", fmt::format("{}", s.outer_radius));
+      if (read_cleanly() && s.outer_radius <= s.inner_radius) g.child("outer_radius").error("outer_radius > inner_radius", fmt::format("{}", s.outer_radius));
     } else if (type == "cylinder") {
       s.type = GeometryType::cylinder;
       s.radius = g.real("radius", std::nullopt, 0.0, inf, true);
@@ -316,14 +353,14 @@ Case CaseReader::read() {
       s.axis = axis == "x" ? 0 : axis == "y" ? 1 : 2;
       s.angle_deg = g.real("angle", 360.0, 0.0, 360.0, true);
       s.thickness = g.real("thickness", 0.0, 0.0);
-      if (s.thickness >= 2.0 * s.radius && s.radius > 0) g.child("thickness").error("thickness < 2 * radius", fmt::format("{}", s.thickness));
+      if (read_cleanly() && s.thickness >= 2.0 * s.radius && s.radius > 0) g.child("thickness").error("thickness < 2 * radius", fmt::format("{}", s.thickness));
     } else if (type == "sphere_cap") {
       s.type = GeometryType::sphere_cap;
       s.radius = g.real("radius", std::nullopt, 0.0, inf, true);
       s.thickness = g.real("thickness", std::nullopt, 0.0, inf, true);
       s.polar_hole_deg = g.real("polar_hole", 0.0, 0.0, 90.0, false, true);
       s.sector_deg = g.real("sector", 360.0, 0.0, 360.0, true);
-      if (s.thickness >= s.radius && s.radius > 0) g.child("thickness").error("thickness < radius", fmt::format("{}", s.thickness));
+      if (read_cleanly() && s.thickness >= s.radius && s.radius > 0) g.child("thickness").error("thickness < radius", fmt::format("{}", s.thickness));
     } else if (type == "annulus") {
       s.type = GeometryType::annulus;
       s.inner_radius = g.real("inner_radius", std::nullopt, 0.0, inf, true);
@@ -331,14 +368,14 @@ Case CaseReader::read() {
       s.slit = g.boolean("slit", false);
       s.thickness = g.real("thickness", std::nullopt, 0.0, inf, true);
       s.z_range = {0.0, s.thickness};
-      if (s.outer_radius <= s.inner_radius) g.child("outer_radius").error("outer_radius > inner_radius", fmt::format("{}", s.outer_radius));
+      if (read_cleanly() && s.outer_radius <= s.inner_radius) g.child("outer_radius").error("outer_radius > inner_radius", fmt::format("{}", s.outer_radius));
     } else if (type == "square_tube") {
       s.type = GeometryType::square_tube;
       s.width = g.real("width", std::nullopt, 0.0, inf, true);
       s.length = g.real("length", std::nullopt, 0.0, inf, true);
       s.corner_radius = g.real("corner_radius", 0.0, 0.0);
       s.thickness = g.real("thickness", std::nullopt, 0.0, inf, true);
-      if (s.corner_radius >= 0.5 * s.width && s.width > 0) g.child("corner_radius").error("corner_radius < width / 2", fmt::format("{}", s.corner_radius));
+      if (read_cleanly() && s.corner_radius >= 0.5 * s.width && s.width > 0) g.child("corner_radius").error("corner_radius < width / 2", fmt::format("{}", s.corner_radius));
     } else if (type == "mesh") {
       s.type = GeometryType::mesh;
       std::string file = g.string("file", std::nullopt);
@@ -350,20 +387,42 @@ Case CaseReader::read() {
       }
     }
     g.reject_unknown_keys();
+    geometry_clean = read_cleanly() && !type.empty();
   }
 
   // discretization
   NodeReader d = root.child("discretization");
   c.discretization_location = location_of(d);
   if (!d.defined()) c.discretization_location = location_of(root);
-  if (d.defined() && d.expect_map()) {
+  if (d.defined() && d.expect_map() && !keys) {
+    // No valid method: its discretization keys cannot be judged (no follow-on errors).
+    for (const auto& key : d.keys()) (void)d.child(key);
+  } else if (d.defined() && d.is_map()) {
     auto allowed = [&](const std::string& key) {
       return keys && std::find(keys->discretization_keys.begin(), keys->discretization_keys.end(), key) != keys->discretization_keys.end();
     };
     auto& disc = c.discretization;
     if (allowed("nodes") && d.has("nodes")) {
       NodeReader n = d.child("nodes");
-      if (n.is_map()) {
+      if (n.is_map() && n.has("coordinates")) {
+        // inline node list (what `lamina convert` writes for an OMLL deck's irregular nodes)
+        NodeReader list = n.child("coordinates");
+        if (list.expect_sequence()) {
+          if (list.node().size() == 0) list.error("at least one node [x, y, z]");
+          else if (static_cast<long long>(list.node().size()) > kMaxDiscretizationCount)
+            list.error(fmt::format("at most {} nodes", kMaxDiscretizationCount), fmt::format("{}", list.node().size()));
+          else {
+            std::vector<Vec3> points;
+            bool ok = true;
+            for (const auto& e : list.elements()) {
+              if (auto p = e.as_reals(3)) points.emplace_back((*p)[0], (*p)[1], (*p)[2]);
+              else ok = false;
+            }
+            if (ok) disc.node_coordinates = points;
+          }
+        }
+        n.reject_unknown_keys();
+      } else if (n.is_map()) {
         std::string file = n.string("file", std::nullopt);
         std::filesystem::path p(file);
         if (p.is_relative()) p = std::filesystem::path(path_).parent_path() / p;
@@ -372,10 +431,19 @@ Case CaseReader::read() {
         n.reject_unknown_keys();
       } else if (auto counts = n.as_integers(3)) {
         std::array<int, 3> v{};
+        bool in_range = true;
         for (int i = 0; i < 3; ++i) {
-          if ((*counts)[i] < 1 || (*counts)[i] > 100000) n.error("node counts in [1, 100000]", fmt::format("{}", (*counts)[i]));
+          if ((*counts)[i] < 1 || (*counts)[i] > 100000) {
+            n.error("node counts in [1, 100000]", fmt::format("{}", (*counts)[i]));
+            in_range = false;
+          }
           v[i] = static_cast<int>(std::clamp<long long>((*counts)[i], 1, 100000));
         }
+        // each count <= 1e5, so the product (<= 1e15) fits a long long
+        const long long total = static_cast<long long>(v[0]) * v[1] * v[2];
+        if (in_range && total > kMaxDiscretizationCount)
+          n.error(fmt::format("at most {} nodes in total (nx * ny * nz)", kMaxDiscretizationCount),
+                  fmt::format("{} x {} x {} = {} nodes", v[0], v[1], v[2], total));
         disc.nodes = v;
       }
     }
@@ -390,15 +458,36 @@ Case CaseReader::read() {
       }
     }
     if (allowed("spacing") && d.has("spacing")) {
+      const std::size_t problems_before = sink_->diagnostics().size();
       Vec3 spacing = d.vec3("spacing", std::nullopt);
-      if ((spacing.array() <= 0).any()) d.child("spacing").error("positive spacings");
+      if (sink_->diagnostics().size() == problems_before) {
+        if ((spacing.array() <= 0).any()) {
+          d.child("spacing").error("positive spacings");
+        } else if (c.geometry.type != GeometryType::mesh && geometry_clean) {
+          // lattice cells in the body: about volume / (dx dy dz)
+          Real volume = 0.0;
+          try {
+            volume = geometry::body_volume(c.geometry);
+          } catch (const std::exception&) {
+            volume = 0.0;
+          }
+          const Real cells = volume / (spacing.x() * spacing.y() * spacing.z());
+          if (std::isfinite(volume) && cells > static_cast<Real>(kMaxDiscretizationCount))
+            d.child("spacing").error(fmt::format("spacings giving at most {} lattice nodes in the body", kMaxDiscretizationCount),
+                                     fmt::format("about {:.3g} nodes", cells));
+        }
+      }
       disc.spacing = spacing;
     }
     if (allowed("horizon") && d.has("horizon")) disc.horizon = d.real("horizon", 1.0, 0.0, INFINITY, true);
     if (allowed("horizon_factor") && d.has("horizon_factor")) disc.horizon_factor = d.real("horizon_factor", 3.0, 0.0, INFINITY, true);
     if (allowed("elements") && d.has("elements")) {
       if (auto e = d.child("elements").as_integers(2)) {
-        if ((*e)[0] < 1 || (*e)[1] < 1) d.child("elements").error("element counts >= 1");
+        if ((*e)[0] < 1 || (*e)[1] < 1)
+          d.child("elements").error("element counts >= 1", fmt::format("[{}, {}]", (*e)[0], (*e)[1]));
+        else if ((*e)[0] > kMaxDiscretizationCount / (*e)[1])
+          d.child("elements").error(fmt::format("at most {} elements in total", kMaxDiscretizationCount),
+                                    fmt::format("{} x {}", (*e)[0], (*e)[1]));
         disc.elements = std::array<int, 2>{static_cast<int>(std::max(1LL, (*e)[0])), static_cast<int>(std::max(1LL, (*e)[1]))};
       }
     }
@@ -415,7 +504,11 @@ Case CaseReader::read() {
         disc.particles_file = p.string("file", std::nullopt);
         p.reject_unknown_keys();
       } else if (auto counts = p.as_integers(2)) {
-        if ((*counts)[0] < 2 || (*counts)[1] < 2) p.error("particle counts >= 2");
+        if ((*counts)[0] < 2 || (*counts)[1] < 2)
+          p.error("particle counts >= 2", fmt::format("[{}, {}]", (*counts)[0], (*counts)[1]));
+        else if ((*counts)[0] > kMaxDiscretizationCount / (*counts)[1])
+          p.error(fmt::format("at most {} particles in total", kMaxDiscretizationCount),
+                  fmt::format("{} x {}", (*counts)[0], (*counts)[1]));
         disc.particles = std::array<int, 2>{static_cast<int>((*counts)[0]), static_cast<int>((*counts)[1])};
       }
     }
@@ -429,7 +522,8 @@ Case CaseReader::read() {
       if (!e.expect_map()) continue;
       BoundaryCondition bc;
       bc.location = location_of(e);
-      if (auto s = read_selection(e.required("select"))) bc.select = *s;
+      if (NodeReader select = e.required("select"); select.defined())
+        if (auto s = read_selection(select)) bc.select = *s;
       bool any = false;
       if (e.has("fix")) {
         any = true;
@@ -471,7 +565,8 @@ Case CaseReader::read() {
       if (!e.expect_map()) continue;
       Load load;
       load.location = location_of(e);
-      if (auto s = read_selection(e.required("select"))) load.select = *s;
+      if (NodeReader select = e.required("select"); select.defined())
+        if (auto s = read_selection(select)) load.select = *s;
       int count = 0;
       for (const auto& [name, kind] : kinds) {
         if (!e.has(name)) continue;
@@ -525,7 +620,9 @@ Case CaseReader::read() {
       if (probe.field == "reaction_force" && !e.has("select") && !e.has("set"))
         e.error("a select: (or set:) for a reaction_force probe", "none");
       if (needs_point && !e.has("at") && !probe.field.empty())
-        e.error(fmt::format("an at: [x, y, z] point for a {} probe", probe.field), "none");
+        e.error(fmt::format("an at: [x, y, z] point for {} {} probe",
+                            std::string("aeiou").find(probe.field[0]) != std::string::npos ? "an" : "a", probe.field),
+                "none");
       e.reject_unknown_keys();
       c.probes.push_back(probe);
     }
@@ -540,6 +637,7 @@ Case CaseReader::read() {
   }
 
   if (c.method == "pd") c.imperfection = root.child("imperfection").node();
+  if (c.method == "mpm") root.child("shell");  // the shell section, read with mpm: (app/mpm_method.cpp)
   if (keys) c.method_section = root.child(c.method).node();
   return c;
 }

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -48,8 +50,11 @@ void DiagnosticSink::report(const YAML::Node& node, const std::string& key_path,
   d.key_path = key_path;
   d.expected = expected;
   d.found = found;
+  const bool from_file = node.IsDefined() && node.Mark().line >= 0;
   for (const auto& [path, text] : overrides_) {
-    if (key_path == path || key_path.rfind(path + ".", 0) == 0) {
+    // the overridden value or below it; or a mapping the override created on its way (no mark)
+    const bool created_by_override = !from_file && !source_position(key_path) && path.rfind(key_path + ".", 0) == 0;
+    if (key_path == path || key_path.rfind(path + ".", 0) == 0 || created_by_override) {
       d.file = "--set " + text;
       diagnostics_.push_back(d);
       return;
@@ -62,11 +67,84 @@ void DiagnosticSink::report(const YAML::Node& node, const std::string& key_path,
       d.column = mark.column + 1;
     }
   }
+  if (d.line == 0) {
+    // A node built in code: take the recorded position of the path or of its nearest ancestor.
+    if (auto position = source_position(key_path)) {
+      d.line = position->first;
+      d.column = position->second;
+    }
+  }
   diagnostics_.push_back(d);
 }
 
+std::optional<std::pair<int, int>> DiagnosticSink::source_position(const std::string& key_path) const {
+  for (std::string path = key_path; !path.empty() && !positions_.empty();) {
+    if (auto it = positions_.find(path); it != positions_.end()) return it->second;
+    const auto dot = path.rfind('.');
+    path = dot == std::string::npos ? std::string() : path.substr(0, dot);
+  }
+  return std::nullopt;
+}
+
+void DiagnosticSink::report_override(const std::string& assignment, const std::string& key_path,
+                                     const std::string& expected, const std::string& found) {
+  Diagnostic d;
+  d.file = "--set " + assignment;
+  d.key_path = key_path;
+  d.expected = expected;
+  d.found = found;
+  diagnostics_.push_back(d);
+}
+
+void sort_by_position(std::vector<Diagnostic>& diagnostics) {
+  std::stable_sort(diagnostics.begin(), diagnostics.end(), [](const Diagnostic& a, const Diagnostic& b) {
+    const long la = a.line > 0 ? a.line : INT_MAX, lb = b.line > 0 ? b.line : INT_MAX;
+    if (la != lb) return la < lb;
+    return a.line > 0 && a.column < b.column;
+  });
+}
+
 void DiagnosticSink::throw_if_any() const {
-  if (!diagnostics_.empty()) throw InputError(diagnostics_);
+  if (diagnostics_.empty()) return;
+  std::vector<Diagnostic> ordered = diagnostics_;
+  sort_by_position(ordered);
+  throw InputError(ordered);
+}
+
+namespace {
+
+/// The child of a mapping / sequence by key or index text (undefined when there is none).
+/// Nodes are returned by value: yaml-cpp's operator= would assign through a handle.
+YAML::Node child_of(const YAML::Node& parent, const std::string& part) {
+  if (parent.IsMap()) {
+    const YAML::Node found = parent[part];
+    if (found.IsDefined()) return found;
+  } else if (parent.IsSequence()) {
+    char* end = nullptr;
+    const long index = std::strtol(part.c_str(), &end, 10);
+    if (!part.empty() && *end == '\0' && index >= 0 && static_cast<std::size_t>(index) < parent.size())
+      return parent[static_cast<std::size_t>(index)];
+  }
+  return YAML::Node(YAML::NodeType::Undefined);
+}
+
+}  // namespace
+
+std::optional<std::pair<int, int>> position_of(const YAML::Node& root, const std::string& key_path) {
+  std::optional<std::pair<int, int>> best;
+  auto take = [&](const YAML::Node& node) {
+    if (node.IsDefined() && node.Mark().line >= 0) best = std::make_pair(node.Mark().line + 1, node.Mark().column + 1);
+  };
+  YAML::Node current(root);
+  take(current);
+  std::stringstream parts(key_path);
+  for (std::string part; std::getline(parts, part, '.');) {
+    const YAML::Node next = child_of(current, part);
+    if (!next.IsDefined()) break;
+    current.reset(next);  // rebind the handle (never assign through it)
+    take(current);
+  }
+  return best;
 }
 
 NodeReader::NodeReader(YAML::Node node, std::string key_path, DiagnosticSink* sink)
@@ -315,7 +393,7 @@ void NodeReader::reject_unknown_keys() const {
 void apply_override(YAML::Node& root, const std::string& assignment, DiagnosticSink& sink) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0) {
-    sink.report(YAML::Node(), "--set", "key.path=value", "'" + assignment + "'");
+    sink.report_override(assignment, "--set", "key.path=value", "'" + assignment + "'");
     return;
   }
   const std::string path = assignment.substr(0, eq);
@@ -324,7 +402,7 @@ void apply_override(YAML::Node& root, const std::string& assignment, DiagnosticS
   try {
     value = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    sink.report(YAML::Node(), path, "a YAML value after '='", "'" + text + "' (" + e.msg + ")");
+    sink.report_override(assignment, path, "a YAML value after '='", "'" + text + "' (" + e.msg + ")");
     return;
   }
   if (!value.IsDefined() || value.IsNull()) value = YAML::Node(text);
@@ -332,11 +410,21 @@ void apply_override(YAML::Node& root, const std::string& assignment, DiagnosticS
   std::vector<std::string> parts;
   std::stringstream ss(path);
   for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
-  if (parts.empty() || std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); })) {
-    sink.report(YAML::Node(), path, "a dotted key path like materials.0.E", "'" + path + "'");
+  if (parts.empty() || path.back() == '.' ||
+      std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); })) {
+    sink.report_override(assignment, path, "a dotted key path like materials.0.E", "'" + path + "'");
     return;
   }
-  sink.mark_override(path, assignment);
+  // A key below a scalar ("title.x" where title is a string) cannot be set.
+  auto scalar_in_the_way = [&](const YAML::Node& node, std::size_t depth) {
+    if (node.IsMap() || node.IsSequence() || !node.IsDefined() || node.IsNull()) return false;
+    std::string at;
+    for (std::size_t i = 0; i < depth; ++i) at += (i ? "." : "") + parts[i];
+    sink.report_override(assignment, path,
+                         fmt::format("a mapping at '{}' to hold the key '{}'", at.empty() ? "<root>" : at, parts[depth]),
+                         describe(node));
+    return true;
+  };
   // Walk with node references (yaml-cpp nodes are handles: assigning through them edits the tree).
   std::vector<YAML::Node> chain{root};
   for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
@@ -346,15 +434,12 @@ void apply_override(YAML::Node& root, const std::string& assignment, DiagnosticS
       char* end = nullptr;
       const long index = std::strtol(key.c_str(), &end, 10);
       if (*end != '\0' || index < 0 || static_cast<std::size_t>(index) >= current.size()) {
-        sink.report(YAML::Node(), path, fmt::format("an index in [0, {}) at '{}'", current.size(), key), "'" + key + "'");
+        sink.report_override(assignment, path, fmt::format("an index in [0, {}) at '{}'", current.size(), key), "'" + key + "'");
         return;
       }
       chain.push_back(current[static_cast<std::size_t>(index)]);
     } else {
-      if (!current.IsMap() && current.IsDefined() && !current.IsNull()) {
-        sink.report(YAML::Node(), path, "a mapping at '" + key + "'", describe(current));
-        return;
-      }
+      if (scalar_in_the_way(current, i)) return;
       YAML::Node next = current[key];
       if (!next.IsDefined() || next.IsNull()) next = YAML::Node(YAML::NodeType::Map), current[key] = next;
       chain.push_back(current[key]);
@@ -366,14 +451,96 @@ void apply_override(YAML::Node& root, const std::string& assignment, DiagnosticS
     char* end = nullptr;
     const long index = std::strtol(last.c_str(), &end, 10);
     if (*end != '\0' || index < 0 || static_cast<std::size_t>(index) >= parent.size()) {
-      sink.report(YAML::Node(), path, fmt::format("an index in [0, {})", parent.size()), "'" + last + "'");
+      sink.report_override(assignment, path, fmt::format("an index in [0, {})", parent.size()), "'" + last + "'");
       return;
     }
+    sink.mark_override(path, assignment);
     parent[static_cast<std::size_t>(index)] = value;
   } else {
+    if (scalar_in_the_way(parent, parts.size() - 1)) return;
+    sink.mark_override(path, assignment);
     parent[last] = value;
   }
 }
+
+namespace {
+
+/// The line (1-based) of a single- or double-quoted scalar that is still open at the end of
+/// the text, or 0. yaml-cpp accepts such a file and ends the scalar at the end of the input.
+/// A quote opens a scalar only where a scalar can start (after indentation, "- ", ": ", "? ",
+/// "[", "{" or ","); comments and block scalars (| and >) are skipped.
+int unclosed_quote_line(const std::string& text) {
+  std::vector<std::string> lines;
+  {
+    std::stringstream in(text);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  }
+  char open_quote = 0;
+  int open_line = 0;
+  int block_indent = -1;  // inside a block scalar: lines indented more than this belong to it
+  for (std::size_t n = 0; n < lines.size(); ++n) {
+    const std::string& line = lines[n];
+    std::size_t i = 0;
+    if (!open_quote) {
+      const std::size_t first = line.find_first_not_of(" \t");
+      if (block_indent >= 0) {
+        if (first == std::string::npos || static_cast<int>(first) > block_indent) continue;
+        block_indent = -1;
+      }
+    }
+    bool scalar_can_start = true;
+    char previous = ' ';
+    for (; i < line.size(); ++i) {
+      const char c = line[i];
+      if (open_quote) {
+        if (open_quote == '"' && c == '\\') {
+          ++i;
+          continue;
+        }
+        if (c == open_quote) {
+          if (open_quote == '\'' && i + 1 < line.size() && line[i + 1] == '\'') {
+            ++i;
+            continue;
+          }
+          open_quote = 0;
+          scalar_can_start = false;
+        }
+        previous = c;
+        continue;
+      }
+      if (c == '#' && (previous == ' ' || previous == '\t' || i == 0)) break;
+      if ((c == '"' || c == '\'') && scalar_can_start) {
+        open_quote = c;
+        open_line = static_cast<int>(n) + 1;
+        previous = c;
+        continue;
+      }
+      if (c == '|' || c == '>') {
+        // a block scalar indicator where a value starts: its content lines follow
+        std::string rest = line.substr(i + 1);
+        const auto hash = rest.find(" #");
+        if (hash != std::string::npos) rest = rest.substr(0, hash);
+        if (scalar_can_start && rest.find_first_not_of("+-0123456789 \t") == std::string::npos) {
+          block_indent = static_cast<int>(line.find_first_not_of(" \t"));
+          break;
+        }
+      }
+      if (c == ' ' || c == '\t') {
+        // whitespace keeps the state
+      } else if (c == '[' || c == '{' || c == ',') {
+        scalar_can_start = true;
+      } else if ((c == '-' || c == ':' || c == '?') && (i + 1 == line.size() || line[i + 1] == ' ' || line[i + 1] == '\t')) {
+        scalar_can_start = true;
+      } else {
+        scalar_can_start = false;
+      }
+      previous = c;
+    }
+  }
+  return open_quote ? open_line : 0;
+}
+
+}  // namespace
 
 YAML::Node load_yaml_file(const std::string& path, DiagnosticSink& sink) {
   std::ifstream in(path);
@@ -384,7 +551,18 @@ YAML::Node load_yaml_file(const std::string& path, DiagnosticSink& sink) {
   try {
     std::stringstream buffer;
     buffer << in.rdbuf();
-    YAML::Node root = YAML::Load(buffer.str());
+    const std::string text = buffer.str();
+    YAML::Node root = YAML::Load(text);
+    if (const int line = unclosed_quote_line(text)) {
+      Diagnostic d;
+      d.file = path;
+      d.line = line;
+      d.column = 1;
+      d.key_path = "<yaml syntax>";
+      d.expected = "valid YAML";
+      d.found = "a quoted string that is never closed (no closing quote before the end of the file)";
+      throw InputError(d);
+    }
     return root;
   } catch (const YAML::ParserException& e) {
     Diagnostic d;

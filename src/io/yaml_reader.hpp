@@ -5,6 +5,7 @@
 
 #include <array>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -22,11 +23,23 @@ class DiagnosticSink {
   explicit DiagnosticSink(std::string file) : file_(std::move(file)) {}
   void report(const YAML::Node& node, const std::string& key_path, const std::string& expected,
               const std::string& found);
+  /// A problem with its position already known (e.g. from a location recorded while reading).
+  void add(Diagnostic diagnostic) { diagnostics_.push_back(std::move(diagnostic)); }
+  /// A problem in a --set assignment itself: reported as coming from the command line.
+  void report_override(const std::string& assignment, const std::string& key_path, const std::string& expected,
+                       const std::string& found);
   /// Paths that came from --set overrides (reported as such instead of a file position).
   void mark_override(const std::string& key_path, const std::string& text) { overrides_.push_back({key_path, text}); }
+  /// Positions for nodes built in code (no YAML mark), e.g. a case converted from an OMLL deck:
+  /// a key path (or its longest listed prefix) -> 1-based line and column in file().
+  void set_source_positions(std::map<std::string, std::pair<int, int>> positions) { positions_ = std::move(positions); }
+  /// The recorded position of a key path or of its nearest recorded ancestor.
+  std::optional<std::pair<int, int>> source_position(const std::string& key_path) const;
+  const std::map<std::string, std::pair<int, int>>& source_positions() const { return positions_; }
   const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
   bool empty() const { return diagnostics_.empty(); }
-  /// Throw InputError with all diagnostics if there are any.
+  /// Throw InputError with all diagnostics if there are any, in file order (by line; problems
+  /// without a position, such as --set errors, last).
   void throw_if_any() const;
   const std::string& file() const { return file_; }
 
@@ -34,7 +47,15 @@ class DiagnosticSink {
   std::string file_;
   std::vector<Diagnostic> diagnostics_;
   std::vector<std::pair<std::string, std::string>> overrides_;
+  std::map<std::string, std::pair<int, int>> positions_;
 };
+
+/// Diagnostics ordered by line and column (stable; those without a line last).
+void sort_by_position(std::vector<Diagnostic>& diagnostics);
+
+/// The 1-based line and column of the node at a dotted key path (materials.0.E) in a loaded
+/// document, or of its deepest existing ancestor; nullopt when nothing along the path has a mark.
+std::optional<std::pair<int, int>> position_of(const YAML::Node& root, const std::string& key_path);
 
 /// Short description of what a YAML node holds, for "found ..." messages.
 std::string describe(const YAML::Node& node);
@@ -105,7 +126,8 @@ class NodeReader {
 /// Problems (bad syntax, index out of range) go to the sink.
 void apply_override(YAML::Node& root, const std::string& assignment, DiagnosticSink& sink);
 
-/// Load a YAML file; a syntax error becomes a Diagnostic with its line and column.
+/// Load a YAML file; a syntax error becomes a Diagnostic with its line and column. Also rejects
+/// a quoted scalar that is never closed (yaml-cpp silently ends it at the end of the file).
 YAML::Node load_yaml_file(const std::string& path, DiagnosticSink& sink);
 
 }  // namespace lamina::io
