@@ -44,10 +44,20 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
   if (!section.expect_map()) return o;
   const std::string formulation =
       section.word("formulation", {"galerkin", "collocation", "weighted_least_squares"}, "galerkin");
-  if (formulation != "galerkin")
-    section.child("formulation")
-        .error("formulation: galerkin (collocation and weighted_least_squares are not implemented in this build yet)",
-               formulation);
+  o.formulation = formulation == "collocation"              ? efg::Formulation::collocation
+                  : formulation == "weighted_least_squares" ? efg::Formulation::weighted_least_squares
+                                                            : efg::Formulation::galerkin;
+  io::NodeReader wlsm = section.child("weighted_least_squares");
+  if (wlsm.defined() && wlsm.expect_map()) {
+    if (o.formulation != efg::Formulation::weighted_least_squares)
+      wlsm.error("no weighted_least_squares section unless formulation: weighted_least_squares", "the section");
+    o.least_squares.traction_weight = wlsm.real("traction_weight", 1e5, 0.0, 1e30, true);
+    if (wlsm.has("displacement_weight"))
+      o.least_squares.displacement_weight = wlsm.real("displacement_weight", std::nullopt, 0.0, 1e40, true);
+    const std::string points = wlsm.word("points", {"nodes", "nodes_and_cell_centres"}, "nodes");
+    o.least_squares.cell_centre_points = points == "nodes_and_cell_centres";
+    wlsm.reject_unknown_keys();
+  }
   o.mls = read_mls_options(section, 3);
 
   io::NodeReader integration = section.child("integration");
@@ -191,7 +201,7 @@ efg::EfgProblem make_efg_problem(const io::Case& c, const Model& model, const ef
 
 MethodEntry efg_method_entry() {
   return MethodEntry{io::MethodKeys{"efg", {"nodes", "jitter"}, true},
-                     "Galerkin element-free analysis, 3D linear elastostatics (seed 004)", read_efg, create_efg};
+                     "element-free Galerkin / collocation / weighted least squares, 3D linear elastostatics (seed 004)", read_efg, create_efg};
 }
 
 }  // namespace lamina::app

@@ -1,9 +1,13 @@
 #pragma once
-// Registration of `method: efg` (Galerkin EFG, 3D linear elastostatics): reading the `efg:`
-// section and translating io::Case + Model into an efg::EfgProblem.
+// Registration of `method: efg` (EFG, 3D linear elastostatics, seed 004 eqs 1-30..1-35): reading
+// the `efg:` section and translating io::Case + Model into an efg::EfgProblem.
 //
 // The `efg:` section (every key optional; defaults shown)
-//   formulation: galerkin              # collocation / weighted_least_squares: not implemented yet (exit 2)
+//   formulation: galerkin              # galerkin | collocation | weighted_least_squares (seed 004 section 1.2.2)
+//   weighted_least_squares:            # only with formulation: weighted_least_squares (eq 1-35)
+//     traction_weight: 1e5             #   beta, weight of the squared traction residuals
+//     displacement_weight: <alpha>     #   default beta [E / (1 - nu^2)]^2 (stiffest material)
+//     points: nodes                    #   nodes | nodes_and_cell_centres (auxiliary equilibrium points)
 //   basis: quadratic                   # linear | quadratic
 //   weight: quartic_spline             # gauss | cubic_spline | quartic_spline   (gauss_beta: 2.5)
 //   support: {shape: box, kappa: 2.0}  # {shape: sphere, kappa: 2.5} | {nearest: N} | {radius: [rx, ry, rz]}
@@ -22,6 +26,18 @@
 //   penalty_factor: 1e5
 //   nitsche: {factor: 100}             # beta = factor (lambda + 2 mu) / h
 //   exact_displacement: [ux, uy, uz]   # expressions of x y z: builtin probes err_displacement, err_stress
+//
+// Strong forms (collocation, weighted_least_squares; src/efg/strong_form_residuals.hpp): equilibrium
+// div sigma + b = 0, traction sigma n = t and u = u-bar as residual rows at the nodes, using the MLS
+// second derivatives. They need basis: quadratic (kappa 2.5 or more), one material, and generated
+// nodes; loads are traction / pressure (pointwise at the nodes of the loaded faces, so a patch
+// smaller than the node spacing loses its resultant) and body_force (a `force` load is an input
+// error). Essential conditions act at the selected nodes (essential_bc,
+// penalty, nitsche and integration keys are ignored). Collocation: 3 rows per node, square system,
+// sparse LU; on edges and corners the traction row uses the normalised sum of the faces' normals.
+// Weighted least squares: normal equations, CHOLMOD. Reactions: sigma(u^h) n integrated over the
+// constrained faces (none for point selections). Use Galerkin for production: the strong forms
+// pass the patch test but degrade with stiff (fully clamped) conditions (seed 004 section 3.3).
 //
 // Loads: force = total over the selected nodes, applied at their positions through the shape
 // functions (f_I += phi_I(x_c) F / n); traction / pressure integrated over the boundary faces where

@@ -10,7 +10,9 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "efg/collocation_system.hpp"
 #include "efg/galerkin_assembly.hpp"
+#include "efg/weighted_least_squares_system.hpp"
 #include "efg/mls_fit_analysis.hpp"
 #include "geometry/body_maps.hpp"
 #include "geometry/generators.hpp"
@@ -84,6 +86,15 @@ std::string to_string(EssentialMethod method) {
   return "?";
 }
 
+std::string to_string(Formulation formulation) {
+  switch (formulation) {
+    case Formulation::galerkin: return "galerkin";
+    case Formulation::collocation: return "collocation";
+    case Formulation::weighted_least_squares: return "weighted_least_squares";
+  }
+  return "?";
+}
+
 EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes)
     : problem_(std::move(problem)), probes_(std::move(probes)) {
   for (const auto& p : probes_) {
@@ -114,6 +125,25 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes)
   for (std::size_t i = 0; i < problem_.materials.size(); ++i) {
     problem_.materials[i].elastic.validate(fmt::format("materials.{}", i));
     materials_.push_back(problem_.materials[i].elastic);
+  }
+  if (problem_.options.formulation != Formulation::galerkin) {
+    const std::string name = to_string(problem_.options.formulation);
+    if (problem_.options.mls.basis != mls::Basis::quadratic)
+      throw InputError("efg.basis",
+                       fmt::format("basis: quadratic with formulation: {} (the strong form needs second derivatives "
+                                   "of the MLS shape functions that reproduce quadratic fields)",
+                                   name),
+                       mls::to_string(problem_.options.mls.basis));
+    if (problem_.materials.size() != 1)
+      throw InputError("materials",
+                       fmt::format("one material with formulation: {} (the strong form imposes no interface "
+                                   "conditions between materials; use formulation: galerkin)",
+                                   name),
+                       fmt::format("{} materials", problem_.materials.size()));
+    if (problem_.options.least_squares.traction_weight <= 0 ||
+        (problem_.options.least_squares.displacement_weight && *problem_.options.least_squares.displacement_weight <= 0))
+      throw InputError("efg.weighted_least_squares", "positive traction_weight and displacement_weight",
+                       "a weight <= 0");
   }
 }
 
@@ -199,7 +229,9 @@ void EfgAnalysis::assign_materials() {
 void EfgAnalysis::build_constraints() {
   constraint_points_.clear();
   const auto method = problem_.options.essential;
-  const bool surface_methods = method == EssentialMethod::penalty || method == EssentialMethod::nitsche;
+  // strong forms impose the conditions at the nodes; the surface points serve their reactions
+  const bool surface_methods = method == EssentialMethod::penalty || method == EssentialMethod::nitsche ||
+                               problem_.options.formulation != Formulation::galerkin;
   const Vec3 lower = problem_.cloud.positions.rowwise().minCoeff(), upper = problem_.cloud.positions.rowwise().maxCoeff();
   const Real tolerance = 1e-9 * (upper - lower).norm();
   for (std::size_t e = 0; e < problem_.constraints.size(); ++e) {
@@ -268,6 +300,13 @@ void EfgAnalysis::build_loads() {
     RegionTest test(load.region, &cells_->map, [this](const Vec3& x) { return nearest_node(x); }, tolerance);
     switch (load.kind) {
       case EfgLoad::Kind::force: {
+        if (problem_.options.formulation != Formulation::galerkin)
+          throw InputError(load.region.label,
+                           fmt::format("traction, pressure or body_force with formulation: {} (the strong form has no "
+                                       "point forces: spread the force as a traction over a face, or use formulation: "
+                                       "galerkin)",
+                                       to_string(problem_.options.formulation)),
+                           "force");
         const Real share = 1.0 / static_cast<Real>(load.region.nodes.size());
         for (Index node : load.region.nodes) {
           const Vec3 x = problem_.cloud.positions.col(node);
@@ -310,6 +349,10 @@ void EfgAnalysis::build_loads() {
 }
 
 void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
+  if (problem_.options.formulation != Formulation::galerkin) {
+    solve_strong_form(sink);
+    return;
+  }
   const Index n = problem_.cloud.size();
   const auto& options = problem_.options;
   const bool vci = options.correction == IntegrationCorrection::vci;

@@ -1,7 +1,11 @@
 #pragma once
-// `method: efg` — Galerkin element-free analysis of 3D linear elastostatics (seed 004):
+// `method: efg` — element-free analysis of 3D linear elastostatics (seed 004, eqs 1-30..1-35):
 // MLS shape functions over the nodes, background cells with Gauss quadrature mapped onto the
-// generator body, essential conditions by penalty / Nitsche / Lagrange multipliers, CHOLMOD solve.
+// generator body, essential conditions by penalty / Nitsche / Lagrange multipliers, CHOLMOD solve
+// (efg.formulation galerkin). The strong forms (collocation, weighted_least_squares: residual rows
+// at the nodes, strong_form_residuals.hpp) share the setup, loads, results and probes; their
+// reactions are sigma(u^h) n integrated over the constrained faces, their energies the volume
+// integral of the strain energy density and the work of the loads.
 //
 // Results
 //   The nodal unknowns u_I are MLS parameters, not displacements: the displacement anywhere is
@@ -30,6 +34,7 @@
 #include "efg/efg_problem.hpp"
 #include "efg/essential_boundary.hpp"
 #include "efg/region_test.hpp"
+#include "efg/strong_form_residuals.hpp"
 #include "mls/mls_shape_functions.hpp"
 #include "mls/neighbour_search.hpp"
 #include "solve/sparse_linear_solver.hpp"
@@ -75,6 +80,11 @@ class EfgAnalysis : public Analysis {
   void build_constraints();
   void build_loads();
   void assemble_and_solve(OutputSink* sink);
+  /// Collocation / weighted least squares (efg.formulation): strong-form rows at the nodes, solve,
+  /// then reactions (traction sigma(u^h) n integrated over the constrained surfaces) and energies.
+  void solve_strong_form(OutputSink* sink);
+  std::vector<StrongFormPoint> strong_form_nodes() const;
+  void strong_form_reactions_and_energies();
   void postprocess();
   int material_at(const Vec3& x) const;
   Index nearest_node(const Vec3& x) const;

@@ -49,10 +49,24 @@ struct EfgLoad {
 /// How essential boundary conditions are imposed (see essential_boundary.hpp).
 enum class EssentialMethod { penalty, penalty_nodes, nitsche, lagrange };
 
+/// Discretisation of the weighted residual equation (seed 004 eq 1-31, section 1.2.2): Galerkin
+/// (weak form, background quadrature), point collocation (collocation_system.hpp) or weighted
+/// least squares (weighted_least_squares_system.hpp).
+enum class Formulation { galerkin, collocation, weighted_least_squares };
+
+/// Weights of the WLSM functional (seed 004 eq 1-35); defaults are the seed's.
+struct WeightedLeastSquaresOptions {
+  Real traction_weight = 1e5;                 // beta
+  std::optional<Real> displacement_weight;    // alpha; none: beta [E / (1 - nu^2)]^2 of the stiffest material
+  bool cell_centre_points = false;            // auxiliary equilibrium points at the background cell centres
+};
+
 /// Correction of the quadrature for linear exactness (see galerkin_assembly.hpp).
 enum class IntegrationCorrection { none, vci };
 
 struct EfgOptions {
+  Formulation formulation = Formulation::galerkin;
+  WeightedLeastSquaresOptions least_squares;
   mls::MlsOptions mls;
   std::optional<std::array<int, 3>> cells;      // background cells per parametric axis (none: from the nodes)
   std::array<int, 3> gauss{2, 2, 2};            // Gauss points per cell and direction
@@ -77,5 +91,6 @@ struct EfgProblem {
 };
 
 std::string to_string(EssentialMethod method);
+std::string to_string(Formulation formulation);
 
 }  // namespace lamina::efg
