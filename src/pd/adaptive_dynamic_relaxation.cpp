@@ -1,0 +1,82 @@
+#include "pd/adaptive_dynamic_relaxation.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace lamina::pd {
+
+AdaptiveDynamicRelaxation::AdaptiveDynamicRelaxation(const LinearPeridynamicSolid& solid, Eigen::VectorXd fictitious_density,
+                                                     std::vector<char> free, AdaptiveDynamicRelaxationOptions options)
+    : solid_(solid), lambda_(std::move(fictitious_density)), free_(std::move(free)), options_(options) {}
+
+RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMatrix& external_force) const {
+  const Index dofs = u.size();
+  Eigen::Map<Eigen::VectorXd> U(u.data(), dofs);
+  const Eigen::Map<const Eigen::VectorXd> fext(external_force.data(), dofs);
+  Eigen::VectorXd velocity = Eigen::VectorXd::Zero(dofs), previous_force(dofs), residual(dofs);
+  RelaxationResult result;
+  const Real dt = 1.0;
+  for (int k = 0;; ++k) {
+    // Stage 1: internal force at U^k.
+    result.state = solid_.bond_state(u);
+    result.internal_force = solid_.internal_force(result.state);
+    const Eigen::Map<const Eigen::VectorXd> fint(result.internal_force.data(), dofs);
+    // Stage 2: residual on the free dofs and the convergence test (seed eq (8)).
+    Real largest = 0, scale = 0;
+    for (Index d = 0; d < dofs; ++d) {
+      residual[d] = free_[static_cast<std::size_t>(d)] ? fint[d] + fext[d] : 0.0;
+      largest = std::isnan(residual[d]) ? residual[d] : std::max(largest, std::abs(residual[d]));
+      scale = std::max({scale, std::abs(fint[d]), std::abs(fext[d])});
+    }
+    if (!std::isfinite(largest) || !std::isfinite(scale))
+      throw AnalysisError(fmt::format("adaptive dynamic relaxation: non-finite residual at iteration {}", k));
+    if (k == 0) result.initial_residual = largest;
+    result.residual = largest;
+    result.iterations = k;
+    const Real absolute = options_.absolute_tolerance >= 0 ? options_.absolute_tolerance : options_.tolerance * scale;
+    const bool relative_ok = largest <= options_.tolerance * result.initial_residual;
+    const bool absolute_ok = k >= options_.switch_iteration && largest <= absolute;
+    if (largest == 0 || relative_ok || absolute_ok) {
+      result.converged = true;
+      return result;
+    }
+    if (k >= options_.max_iterations) return result;
+    // Stage 3: adaptive damping from the local diagonal stiffness (seed eq (6)).
+    Real c = 0;
+    if (k > 0) {
+      Real numerator = 0, denominator = 0;
+      for (Index d = 0; d < dofs; ++d) {
+        if (!free_[static_cast<std::size_t>(d)]) continue;
+        denominator += U[d] * U[d];
+        const Real v = velocity[d];
+        if (v == 0 || std::abs(v) < options_.velocity_guard * std::abs(U[d])) continue;
+        const Real local_stiffness = -(fint[d] - previous_force[d]) / (lambda_[d] * dt * v);
+        numerator += U[d] * local_stiffness * U[d];
+      }
+      if (denominator > 0 && numerator > 0) c = 2.0 * std::sqrt(numerator / denominator);
+      if (c > 2.0) c = 1.9;
+    }
+    // Stage 4: velocity update (start-up half step at k = 0, central difference otherwise).
+    Real dissipated = 0;
+    for (Index d = 0; d < dofs; ++d) {
+      if (!free_[static_cast<std::size_t>(d)]) {
+        velocity[d] = 0;
+        continue;
+      }
+      const Real old_velocity = velocity[d];
+      velocity[d] = k == 0 ? 0.5 * dt * residual[d] / lambda_[d]
+                           : ((2.0 - c * dt) * old_velocity + 2.0 * dt * residual[d] / lambda_[d]) / (2.0 + c * dt);
+      const Real mean = 0.5 * (old_velocity + velocity[d]);
+      dissipated += c * lambda_[d] * mean * mean * dt;
+    }
+    result.damping_energy += dissipated;
+    // Stage 5: displacement update; remember F^k for the next local stiffness.
+    U += dt * velocity;
+    previous_force = fint;
+  }
+}
+
+}  // namespace lamina::pd

@@ -1,0 +1,49 @@
+#pragma once
+// AdaptiveDynamicRelaxation: the quasi-static equilibrium solver of seed 002 section 3
+// (Kilic & Madenci 2010 with the seed's changes), for one load increment.
+//
+//   Lambda U'' + c Lambda U' = F(U) = F_int(U) + F_ext,   dt = 1
+//   lambda_ii = 1/4 dt^2 sum_j |K0_ij|                          (seed eq (5): Gershgorin bound of K0)
+//   1K_ii = -(F_i^n - F_i^(n-1)) / (lambda_ii dt Udot_i^(n-1/2)), 0 where |Udot_i| < guard |U_i|
+//   c^n = 2 sqrt(U^T 1K U / U^T U)   (0 if negative; 1.9 if above 2)           (seed eq (6))
+//   Udot^(n+1/2) = ((2 - c dt) Udot^(n-1/2) + 2 dt F^n / lambda) / (2 + c dt)  (seed eq (7))
+//   Udot^(1/2) = dt F^0 / (2 lambda)                                          (start-up half step)
+//   U^(n+1) = U^n + dt Udot^(n+1/2)
+//   converged (seed eq (8)): max|R^k| <= tol_rel max|R^0| for k < k_switch; afterwards that OR
+//   max|R^k| <= tol_abs. R = F_int + F_ext on the free degrees of freedom.
+// The energy dissipated by the fictitious damping, sum c lambda Udot^2 dt, is accumulated.
+#include <vector>
+
+#include "pd/linear_peridynamic_solid.hpp"
+#include "pd/peridynamic_problem.hpp"
+
+namespace lamina::pd {
+
+struct RelaxationResult {
+  bool converged = false;
+  int iterations = 0;
+  Real initial_residual = 0;    // max |R^0|
+  Real residual = 0;            // max |R| at the end
+  Real damping_energy = 0;      // dissipated in this increment
+  BondState state;              // at the final U
+  PointMatrix internal_force;   // at the final U
+};
+
+class AdaptiveDynamicRelaxation {
+ public:
+  /// fictitious_density: lambda per dof (3N); free: 1 for unknown dofs, 0 for prescribed ones.
+  AdaptiveDynamicRelaxation(const LinearPeridynamicSolid& solid, Eigen::VectorXd fictitious_density,
+                            std::vector<char> free, AdaptiveDynamicRelaxationOptions options);
+
+  /// Relax u (3 x N: prescribed values on constrained dofs, the start field elsewhere) to equilibrium
+  /// under external_force (3 x N). Throws AnalysisError on non-finite values.
+  RelaxationResult relax(PointMatrix& u, const PointMatrix& external_force) const;
+
+ private:
+  const LinearPeridynamicSolid& solid_;
+  Eigen::VectorXd lambda_;
+  std::vector<char> free_;
+  AdaptiveDynamicRelaxationOptions options_;
+};
+
+}  // namespace lamina::pd

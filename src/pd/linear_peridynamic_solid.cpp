@@ -1,0 +1,215 @@
+#include "pd/linear_peridynamic_solid.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <omp.h>
+
+namespace lamina::pd {
+
+BondState LinearPeridynamicSolid::bond_state(const PointMatrix& u, bool linearised) const {
+  const PeridynamicBody& body = body_;
+  const Index n = body.nodes();
+  const bool planar = body.dimension() == 2;
+  BondState s;
+  s.direction.resize(3, body.bonds());
+  s.length.resize(body.bonds());
+  s.extension.resize(body.bonds());
+  s.dilatation.resize(3, n);
+  s.dilatation_force.resize(3, n);
+  s.pair_force.resize(body.bonds());
+  const auto& x0 = body.bond_length();
+  const auto& w = body.dilatation_weight();
+  const auto& c = body.bond_modulus();
+  const auto& bv = body.bond_volume();
+  // Stage 1: extensions and dilatation (gather over each node's bonds).
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < n; ++i) {
+    Eigen::Vector3d theta = Eigen::Vector3d::Zero();
+    const Vec3 pi = body.positions().col(i), ui = u.col(i);
+    for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
+      const Index j = body.neighbour(b);
+      Vec3 xi = body.positions().col(j) - pi;
+      Vec3 du = u.col(j) - ui;
+      if (planar) {
+        xi.z() = 0;
+        du.z() = 0;
+      }
+      Real e;
+      Vec3 m;
+      Real y;
+      if (linearised) {
+        m = xi / x0[b];
+        e = m.dot(du);
+        y = x0[b];
+      } else {
+        const Vec3 yv = xi + du;
+        y = yv.norm();
+        m = yv / y;
+        e = y - x0[b];
+      }
+      s.direction.col(b) = m;
+      s.length[b] = y;
+      s.extension[b] = e;
+      theta += w.col(b) * (e * bv[b]);
+    }
+    s.dilatation.col(i) = theta;
+    s.dilatation_force.col(i) = body.dilatation_coupling(i) * theta;
+  }
+  // Stage 2: pair forces P_ij = V_i beta V_j (t_ij + t_ji).
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < n; ++i) {
+    for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
+      const Index j = body.neighbour(b), r = body.reverse(b);
+      const Real tij = s.dilatation_force.col(i).dot(w.col(b)) + c[b] * s.extension[b];
+      const Real tji = s.dilatation_force.col(j).dot(w.col(r)) + c[r] * s.extension[b];
+      s.pair_force[b] = body.volumes()[i] * bv[b] * (tij + tji);
+    }
+  }
+  return s;
+}
+
+PointMatrix LinearPeridynamicSolid::internal_force(const BondState& s) const {
+  const PeridynamicBody& body = body_;
+  PointMatrix f(3, body.nodes());
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < body.nodes(); ++i) {
+    Vec3 sum = Vec3::Zero();
+    for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) sum += s.pair_force[b] * s.direction.col(b);
+    f.col(i) = sum;
+  }
+  return f;
+}
+
+Eigen::VectorXd LinearPeridynamicSolid::energy_density(const BondState& s) const {
+  const PeridynamicBody& body = body_;
+  Eigen::VectorXd w(body.nodes());
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < body.nodes(); ++i) {
+    Real bond = 0;
+    for (Index b = body.first_bond(i); b < body.end_bond(i); ++b)
+      bond += body.bond_modulus()[b] * s.extension[b] * s.extension[b] * body.bond_volume()[b];
+    w[i] = 0.5 * s.dilatation.col(i).dot(s.dilatation_force.col(i)) + 0.5 * bond;
+  }
+  return w;
+}
+
+Real LinearPeridynamicSolid::strain_energy(const BondState& s) const {
+  return energy_density(s).dot(body_.volumes());
+}
+
+solve::SparseMatrix LinearPeridynamicSolid::stiffness(const BondState& s, bool material, bool geometric) const {
+  const PeridynamicBody& body = body_;
+  const Index n = body.nodes();
+  const auto& w = body.dilatation_weight();
+  const auto& c = body.bond_modulus();
+  const auto& bv = body.bond_volume();
+  const auto& vol = body.volumes();
+  // grad theta_a,i (3 x D per node pair): self part -sum_j w^a beta V_j M_ij; neighbour part w^a_ij beta V_j M_ij.
+  std::vector<Mat3> self(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < n; ++i) {
+    Mat3 sum = Mat3::Zero();
+    for (Index b = body.first_bond(i); b < body.end_bond(i); ++b)
+      sum += (bv[b] * s.direction.col(b)) * w.col(b).transpose();
+    self[static_cast<std::size_t>(i)] = -sum;
+  }
+  auto gradient = [&](Index i, Index b_or_self) -> Mat3 {  // b_or_self < 0: the node itself
+    if (b_or_self < 0) return self[static_cast<std::size_t>(i)];
+    return Mat3((bv[b_or_self] * s.direction.col(b_or_self)) * w.col(b_or_self).transpose());
+  };
+  // Pass 1: the blocks of each column node J (nodes K <= J within two families).
+  std::vector<std::vector<Index>> rows(static_cast<std::size_t>(n));
+  const int threads = omp_get_max_threads();
+  std::vector<std::vector<Index>> markers(static_cast<std::size_t>(threads), std::vector<Index>(static_cast<std::size_t>(n), -1));
+#pragma omp parallel for schedule(dynamic, 16)
+  for (Index J = 0; J < n; ++J) {
+    auto& marker = markers[static_cast<std::size_t>(omp_get_thread_num())];
+    auto& list = rows[static_cast<std::size_t>(J)];
+    auto add = [&](Index K) {
+      if (K <= J && marker[static_cast<std::size_t>(K)] != J) {
+        marker[static_cast<std::size_t>(K)] = J;
+        list.push_back(K);
+      }
+    };
+    add(J);
+    for (Index b = body.first_bond(J); b < body.end_bond(J); ++b) {
+      const Index i = body.neighbour(b);
+      add(i);
+      if (material)
+        for (Index bb = body.first_bond(i); bb < body.end_bond(i); ++bb) add(body.neighbour(bb));
+    }
+    std::sort(list.begin(), list.end());
+  }
+  // Column starts.
+  std::vector<Index> start(static_cast<std::size_t>(3 * n) + 1, 0);
+  for (Index J = 0; J < n; ++J) {
+    const Index blocks = static_cast<Index>(rows[static_cast<std::size_t>(J)].size());
+    for (int b = 0; b < 3; ++b) start[static_cast<std::size_t>(3 * J + b) + 1] = 3 * (blocks - 1) + b + 1;
+  }
+  for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+  solve::SparseMatrix K(3 * n, 3 * n);
+  K.resizeNonZeros(start.back());
+  for (std::size_t k = 0; k < start.size(); ++k) K.outerIndexPtr()[k] = static_cast<int>(start[k]);
+  // Pass 2: values, gathered per column node J.
+#pragma omp parallel for schedule(dynamic, 16)
+  for (Index J = 0; J < n; ++J) {
+    auto& marker = markers[static_cast<std::size_t>(omp_get_thread_num())];
+    const auto& list = rows[static_cast<std::size_t>(J)];
+    for (std::size_t k = 0; k < list.size(); ++k) marker[static_cast<std::size_t>(list[k])] = static_cast<Index>(k);
+    std::vector<Mat3> blocks(list.size(), Mat3::Zero());
+    auto block = [&](Index K) -> Mat3* {
+      return K <= J ? &blocks[static_cast<std::size_t>(marker[static_cast<std::size_t>(K)])] : nullptr;
+    };
+    // Bond terms of J's own bonds.
+    for (Index b = body.first_bond(J); b < body.end_bond(J); ++b) {
+      const Index j = body.neighbour(b), r = body.reverse(b);
+      const Vec3 m = s.direction.col(b);
+      const Mat3 mm = m * m.transpose();
+      Mat3 S = Mat3::Zero();
+      if (material) S += vol[J] * bv[b] * (c[b] + c[r]) * mm;
+      if (geometric) S += s.pair_force[b] / s.length[b] * (Mat3::Identity() - mm);
+      *block(J) += S;
+      if (Mat3* kj = block(j)) *kj -= S;
+    }
+    // Dilatation terms: every node i whose theta depends on u_J (i = J or J in family(i)).
+    if (material) {
+      auto add_dilatation = [&](Index i, const Mat3& gJ) {
+        const Mat3 qg = vol[i] * body.dilatation_coupling(i) * gJ.transpose();
+        if (Mat3* ki = block(i)) *ki += gradient(i, -1) * qg;
+        for (Index bb = body.first_bond(i); bb < body.end_bond(i); ++bb)
+          if (Mat3* kk = block(body.neighbour(bb))) *kk += gradient(i, bb) * qg;
+      };
+      add_dilatation(J, gradient(J, -1));
+      for (Index b = body.first_bond(J); b < body.end_bond(J); ++b) {
+        const Index i = body.neighbour(b), r = body.reverse(b);  // r: bond i -> J
+        add_dilatation(i, gradient(i, r));
+      }
+    }
+    // Scatter into column J's three columns (rows K <= J; diagonal block upper part only).
+    for (int bcol = 0; bcol < 3; ++bcol) {
+      Index p = start[static_cast<std::size_t>(3 * J + bcol)];
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        const Index Kn = list[k];
+        const int rows_here = Kn == J ? bcol + 1 : 3;
+        for (int a = 0; a < rows_here; ++a, ++p) {
+          K.innerIndexPtr()[p] = static_cast<int>(3 * Kn + a);
+          K.valuePtr()[p] = blocks[k](a, bcol);
+        }
+      }
+    }
+  }
+  return K;
+}
+
+Eigen::VectorXd LinearPeridynamicSolid::absolute_row_sums(const solve::SparseMatrix& upper) {
+  Eigen::VectorXd sums = Eigen::VectorXd::Zero(upper.rows());
+  for (Index col = 0; col < upper.outerSize(); ++col)
+    for (solve::SparseMatrix::InnerIterator it(upper, col); it; ++it) {
+      sums[it.row()] += std::abs(it.value());
+      if (it.row() != col) sums[col] += std::abs(it.value());
+    }
+  return sums;
+}
+
+}  // namespace lamina::pd

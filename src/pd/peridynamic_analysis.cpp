@@ -1,0 +1,577 @@
+#include "pd/peridynamic_analysis.hpp"
+
+#include <fmt/format.h>
+
+#include <Spectra/MatOp/SparseCholesky.h>
+#include <Spectra/MatOp/SparseSymMatProd.h>
+#include <Spectra/SymGEigsSolver.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace lamina::pd {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+Real seconds_since(Clock::time_point t) { return std::chrono::duration<Real>(Clock::now() - t).count(); }
+
+/// The free-free part of a symmetric matrix stored as its upper triangle (free dofs renumbered in order).
+solve::SparseMatrix reduce_upper(const solve::SparseMatrix& upper, const std::vector<Index>& map, Index free_count) {
+  std::vector<Eigen::Triplet<Real, int>> entries;
+  entries.reserve(static_cast<std::size_t>(upper.nonZeros()));
+  for (Index col = 0; col < upper.outerSize(); ++col) {
+    const Index c = map[static_cast<std::size_t>(col)];
+    if (c < 0) continue;
+    for (solve::SparseMatrix::InnerIterator it(upper, col); it; ++it) {
+      const Index r = map[static_cast<std::size_t>(it.row())];
+      if (r >= 0) entries.emplace_back(static_cast<int>(r), static_cast<int>(c), it.value());
+    }
+  }
+  solve::SparseMatrix reduced(free_count, free_count);
+  reduced.setFromTriplets(entries.begin(), entries.end());
+  return reduced;
+}
+
+const std::vector<std::string> vector_components{"x", "y", "z", "magnitude"};
+const std::vector<std::string> tensor_components{"xx", "yy", "zz", "xy", "yz", "zx", "von_mises"};
+
+}  // namespace
+
+PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes)
+    : problem_(std::move(problem)), probes_(std::move(probes)) {
+  for (std::size_t k = 0; k < probes_.size(); ++k) {
+    const Probe& p = probes_[k];
+    const std::string where = fmt::format("probes.{}", k);
+    auto in = [](const std::vector<std::string>& list, const std::string& s) {
+      return std::find(list.begin(), list.end(), s) != list.end();
+    };
+    if (p.field == "displacement" || p.field == "velocity") {
+      if (!in(vector_components, p.component)) throw InputError(where + ".component", "x, y, z or magnitude", p.component);
+      if (!p.at && p.nodes.empty()) throw InputError(where + ".at", "a point (at: [x, y, z]) or a set", "none");
+    } else if (p.field == "strain" || p.field == "stress") {
+      if (!in(tensor_components, p.component) || (p.field == "strain" && p.component == "von_mises"))
+        throw InputError(where + ".component", "xx, yy, zz, xy, yz or zx (stress also von_mises)", p.component);
+      if (!p.at && p.nodes.empty()) throw InputError(where + ".at", "a point (at: [x, y, z]) or a set", "none");
+    } else if (p.field == "reaction_force") {
+      if (!in(vector_components, p.component)) throw InputError(where + ".component", "x, y, z or magnitude", p.component);
+      if (p.nodes.empty()) throw InputError(where + ".select", "a selection of nodes for a reaction_force probe", "none");
+    } else if (p.field == "energy") {
+      if (!in({"internal", "kinetic", "external", "total", "damping"}, p.component))
+        throw InputError(where + ".component", "internal, kinetic, external, total or damping", p.component);
+    } else if (p.field == "eigenvalue") {
+      int k = 0;
+      try {
+        k = std::stoi(p.component);
+      } catch (...) {
+      }
+      if (k < 1 || k > problem_.buckling.modes || problem_.analysis != PdAnalysisKind::buckling)
+        throw InputError(where + ".component",
+                         fmt::format("a mode number 1..{} of a buckling analysis (pd.analysis: buckling)", problem_.buckling.modes),
+                         p.component);
+    } else {
+      throw InputError(where + ".field", "displacement, velocity, strain, stress, reaction_force, energy or eigenvalue",
+                       p.field);
+    }
+  }
+  const auto start = Clock::now();
+  PointMatrix positions = problem_.positions;
+  const auto& imperfection = problem_.imperfection;
+  auto scaled = [&](const PointMatrix& shape) {
+    const Real largest = shape.colwise().norm().maxCoeff();
+    if (!(largest > 0)) throw InputError("imperfection", "a non-zero imperfection shape", "a zero field");
+    return PointMatrix(shape * (imperfection.amplitude / largest));
+  };
+  if (imperfection.kind == Imperfection::Kind::shape) positions += scaled(imperfection.shape);
+  build_body(positions);
+  if (imperfection.kind == Imperfection::Kind::buckling_mode) {
+    buckling_modes(imperfection.mode);
+    positions += scaled(modes_[static_cast<std::size_t>(imperfection.mode - 1)]);
+    build_body(positions);
+    eigenvalues_.clear();
+    modes_.clear();
+  }
+  const Index n = body_->nodes();
+  u_ = PointMatrix::Zero(3, n);
+  velocity_ = PointMatrix::Zero(3, n);
+  internal_force_ = PointMatrix::Zero(3, n);
+  external_force_ = PointMatrix::Zero(3, n);
+  state_ = solid_->bond_state(u_);
+  timings_["setup_s"] = seconds_since(start);
+}
+
+void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
+  solid_.reset();
+  body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, problem_.body);
+  solid_ = std::make_unique<LinearPeridynamicSolid>(*body_);
+}
+
+Real PeridynamicAnalysis::ramp(int index, Real factor) const {
+  return index < 0 ? factor : problem_.ramps[static_cast<std::size_t>(index)](factor);
+}
+
+PointMatrix PeridynamicAnalysis::external_force(Real factor) const {
+  PointMatrix f = PointMatrix::Zero(3, body_->nodes());
+  for (const auto& load : problem_.forces) f.col(load.node) += load.force * ramp(load.ramp, factor);
+  return f;
+}
+
+void PeridynamicAnalysis::apply_prescribed(PointMatrix& u, Real factor, bool velocities) const {
+  for (const auto& p : problem_.prescribed)
+    if (p.velocity == velocities) u(p.component, p.node) = p.value * ramp(p.ramp, factor);
+}
+
+std::vector<char> PeridynamicAnalysis::free_dofs(bool include_velocity) const {
+  std::vector<char> free(static_cast<std::size_t>(3 * body_->nodes()), 1);
+  for (const auto& p : problem_.prescribed)
+    if (!p.velocity || include_velocity) free[static_cast<std::size_t>(3 * p.node + p.component)] = 0;
+  if (body_->dimension() == 2)
+    for (Index i = 0; i < body_->nodes(); ++i) free[static_cast<std::size_t>(3 * i + 2)] = 0;
+  return free;
+}
+
+void PeridynamicAnalysis::solve() {
+  struct NullSink : OutputSink {
+    void output_point(Index, Real, Real) override {}
+    void progress(Real, const std::string&) override {}
+  } sink;
+  run(sink);
+}
+
+void PeridynamicAnalysis::run(OutputSink& sink) {
+  const auto start = Clock::now();
+  switch (problem_.analysis) {
+    case PdAnalysisKind::linear_static: run_linear_static(&sink); break;
+    case PdAnalysisKind::quasi_static: run_quasi_static(&sink); break;
+    case PdAnalysisKind::explicit_dynamics: run_explicit(&sink); break;
+    case PdAnalysisKind::buckling: run_buckling(&sink); break;
+  }
+  timings_["solve_s"] = seconds_since(start);
+}
+
+PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper) {
+  const Index n = body_->nodes();
+  k0_upper = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
+  const std::vector<char> free = free_dofs(true);
+  std::vector<Index> map(free.size(), -1);
+  Index count = 0;
+  for (std::size_t d = 0; d < free.size(); ++d)
+    if (free[d]) map[d] = count++;
+  PointMatrix u = PointMatrix::Zero(3, n);
+  apply_prescribed(u, 1.0, false);
+  const PointMatrix f = external_force(1.0);
+  const Eigen::Map<const Eigen::VectorXd> uc(u.data(), u.size()), fv(f.data(), f.size());
+  const Eigen::VectorXd rhs_full = fv - solve::multiply_symmetric_upper(k0_upper, uc);
+  Eigen::VectorXd rhs(count);
+  for (std::size_t d = 0; d < free.size(); ++d)
+    if (map[d] >= 0) rhs[map[d]] = rhs_full[static_cast<Index>(d)];
+  const solve::SparseMatrix reduced = reduce_upper(k0_upper, map, count);
+  solve::SolverReport report;
+  const Eigen::VectorXd x = solve::solve_symmetric(reduced, rhs, report);
+  timings_["factor_s"] = report.factor_seconds;
+  for (std::size_t d = 0; d < free.size(); ++d)
+    if (map[d] >= 0) u.data()[d] = x[map[d]];
+  return u;
+}
+
+void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {
+  sink->output_point(0, 0.0, 0.0);
+  solve::SparseMatrix k0;
+  u_ = linear_solution(k0);
+  state_ = solid_->bond_state(u_, true);
+  internal_force_ = solid_->internal_force(state_);
+  external_force_ = external_force(1.0);
+  energy_internal_ = solid_->strain_energy(state_);
+  // Clapeyron: 1/2 (f . u + reactions . prescribed displacements) = 1/2 sum (F_ext - F_int - F_ext) at constrained.
+  const PointMatrix support = -(internal_force_ + external_force_);
+  const std::vector<char> free = free_dofs(true);
+  Real work = 0;
+  for (Index d = 0; d < u_.size(); ++d)
+    work += 0.5 * (external_force_.data()[d] + (free[static_cast<std::size_t>(d)] ? 0.0 : support.data()[d])) * u_.data()[d];
+  energy_external_ = work;
+  steps_ = 1;
+  sink->output_point(1, 1.0, 1.0);
+}
+
+void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
+  const Index n = body_->nodes();
+  const auto& options = problem_.relaxation;
+  // Fictitious density from the reference stiffness (seed 002 eq (5)).
+  const solve::SparseMatrix k0 = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
+  Eigen::VectorXd lambda = 0.25 * options.density_factor * LinearPeridynamicSolid::absolute_row_sums(k0);
+  const std::vector<char> free = free_dofs(true);
+  for (Index d = 0; d < lambda.size(); ++d)
+    if (!(lambda[d] > 0)) {
+      if (free[static_cast<std::size_t>(d)])
+        throw AnalysisError(fmt::format("node {} has no stiffness in direction {} (isolated node?)", d / 3, d % 3));
+      lambda[d] = 1.0;
+    }
+  AdaptiveDynamicRelaxation relaxation(*solid_, lambda, free, options);
+  sink->output_point(0, 0.0, 0.0);
+  // Start field of the first increment: inverse-distance interpolation of the prescribed values.
+  auto interpolated_start = [&](Real factor) {
+    PointMatrix u = PointMatrix::Zero(3, n);
+    std::array<std::vector<const PrescribedDof*>, 3> by_component;
+    for (const auto& p : problem_.prescribed)
+      if (!p.velocity) by_component[static_cast<std::size_t>(p.component)].push_back(&p);
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const auto& list = by_component[static_cast<std::size_t>(a)];
+        if (list.empty() || !free[static_cast<std::size_t>(3 * i + a)]) continue;
+        Real sw = 0, su = 0;
+        for (const PrescribedDof* p : list) {
+          const Real d2 = (body_->positions().col(p->node) - body_->positions().col(i)).squaredNorm();
+          const Real w = 1.0 / (d2 * d2 + 1e-300);
+          sw += w;
+          su += w * p->value * ramp(p->ramp, factor);
+        }
+        u(a, i) = su / sw;
+      }
+    apply_prescribed(u, factor, false);
+    return u;
+  };
+  const Real nominal = 1.0 / static_cast<Real>(options.increments);
+  Real step = nominal, factor = 0.0, previous_factor = 0.0;
+  PointMatrix previous = PointMatrix::Zero(3, n), before_previous = previous;
+  bool have_two = false;
+  int cuts = 0;
+  Index increment = 0;
+  energy_damping_ = 0;
+  energy_external_ = 0;
+  PointMatrix generalized_force = PointMatrix::Zero(3, n);  // F_ext on free dofs, support force on prescribed ones
+  while (factor < 1.0 - 1e-12) {
+    const Real target = std::min(1.0, factor + step);
+    // Stage 1: start field of the increment.
+    PointMatrix u;
+    if (factor == 0.0) u = interpolated_start(target);
+    else if (options.secant_predictor && have_two)
+      u = previous + (target - factor) / (factor - previous_factor) * (previous - before_previous);
+    else if (options.secant_predictor) u = previous * (target / factor);
+    else u = previous;
+    apply_prescribed(u, target, false);
+    // Stage 2: relax to equilibrium.
+    const PointMatrix fext = external_force(target);
+    RelaxationResult result = relaxation.relax(u, fext);
+    if (!result.converged) {
+      if (++cuts > options.max_cuts)
+        throw AnalysisError(fmt::format(
+            "adaptive dynamic relaxation did not converge at load factor {:.6g} after {} increment cuts ({} iterations, "
+            "residual {:.3e} of initial {:.3e})",
+            target, options.max_cuts, result.iterations, result.residual, result.initial_residual));
+      step *= 0.5;
+      continue;
+    }
+    // Stage 3: accept the increment.
+    ++increment;
+    PointMatrix new_generalized = fext;
+    for (Index d = 0; d < u.size(); ++d)
+      if (!free[static_cast<std::size_t>(d)]) new_generalized.data()[d] = -result.internal_force.data()[d] - fext.data()[d] + fext.data()[d];
+    energy_external_ += 0.5 * ((generalized_force + new_generalized).array() * (u - previous).array()).sum();
+    generalized_force = new_generalized;
+    before_previous = previous;
+    have_two = factor > 0.0;
+    previous_factor = factor;
+    previous = u;
+    factor = target;
+    u_ = u;
+    state_ = std::move(result.state);
+    internal_force_ = std::move(result.internal_force);
+    external_force_ = fext;
+    energy_internal_ = solid_->strain_energy(state_);
+    energy_damping_ += result.damping_energy;
+    last_iterations_ = result.iterations;
+    last_residual_ = result.residual;
+    increment_iterations_.push_back(result.iterations);
+    steps_ = increment;
+    sink->output_point(increment, factor, factor);
+    sink->progress(factor, fmt::format("increment {} load factor {:.4f} iterations {}", increment, factor, result.iterations));
+    step = std::min(nominal, 2.0 * step);
+  }
+}
+
+void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
+  const Index n = body_->nodes();
+  const auto& options = problem_.explicit_options;
+  Eigen::VectorXd mass(3 * n);
+  for (Index i = 0; i < n; ++i) mass.segment<3>(3 * i).setConstant(problem_.density[i] * problem_.volumes[i]);
+  // Critical time step: Gershgorin bound of the largest eigenvalue of M^-1 K0.
+  const solve::SparseMatrix k0 = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
+  const Eigen::VectorXd rows = LinearPeridynamicSolid::absolute_row_sums(k0);
+  const Real omega_max = std::sqrt((rows.array() / mass.array()).maxCoeff());
+  const Real critical = 2.0 / omega_max;
+  Real dt = options.time_step > 0 ? options.time_step : options.safety_factor * critical;
+  if (dt > critical)
+    throw AnalysisError(fmt::format("explicit time step {:.4g} exceeds the critical step {:.4g}", dt, critical));
+  timings_["time_step"] = dt;
+  timings_["critical_time_step"] = critical;
+  const Index steps = std::max<Index>(1, static_cast<Index>(std::ceil(options.end_time / dt - 1e-9)));
+  dt = options.end_time / static_cast<Real>(steps);
+  const Index every = std::max<Index>(1, steps / std::max(1, options.outputs));
+  const std::vector<char> free = free_dofs(true);
+  Eigen::Map<Eigen::VectorXd> u(u_.data(), 3 * n), v(velocity_.data(), 3 * n);
+  if (problem_.initial_velocity.cols() == n) velocity_ = problem_.initial_velocity;
+  apply_prescribed(u_, 0.0, false);
+  apply_prescribed(velocity_, 0.0, true);
+  auto forces = [&](Real t) {
+    state_ = solid_->bond_state(u_);
+    internal_force_ = solid_->internal_force(state_);
+    external_force_ = external_force(t / options.end_time);
+  };
+  forces(0.0);
+  Eigen::VectorXd acceleration(3 * n);
+  auto accelerate = [&]() {
+    const Eigen::Map<const Eigen::VectorXd> fi(internal_force_.data(), 3 * n), fe(external_force_.data(), 3 * n);
+    acceleration = ((fi + fe).array() / mass.array()).matrix() - options.damping * v;
+  };
+  accelerate();
+  auto support_force = [&]() {  // external generalized force: loads on free dofs, support forces on prescribed ones
+    PointMatrix g = external_force_;
+    for (Index d = 0; d < 3 * n; ++d)
+      if (!free[static_cast<std::size_t>(d)]) g.data()[d] = mass[d] * acceleration[d] - internal_force_.data()[d];
+    return g;
+  };
+  energy_internal_ = solid_->strain_energy(state_);
+  energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
+  const Real initial_total = energy_internal_ + energy_kinetic_;
+  energy_external_ = 0;
+  sink->output_point(0, 0.0, 0.0);
+  for (Index step = 1; step <= steps; ++step) {
+    const Real t = static_cast<Real>(step) * dt;
+    const PointMatrix g_old = support_force();
+    const Eigen::VectorXd u_old = u;
+    // Stage 1: half-step velocity; Stage 2: positions; Stage 3: prescribed motion.
+    for (Index d = 0; d < 3 * n; ++d)
+      if (free[static_cast<std::size_t>(d)]) v[d] += 0.5 * dt * acceleration[d];
+    apply_prescribed(velocity_, (t - 0.5 * dt) / options.end_time, true);
+    for (Index d = 0; d < 3 * n; ++d) u[d] += dt * v[d];
+    apply_prescribed(u_, t / options.end_time, false);
+    // Stage 4: forces and accelerations; Stage 5: second half-step velocity.
+    forces(t);
+    accelerate();
+    for (Index d = 0; d < 3 * n; ++d)
+      if (free[static_cast<std::size_t>(d)]) v[d] += 0.5 * dt * acceleration[d];
+    apply_prescribed(velocity_, t / options.end_time, true);
+    for (Index d = 0; d < 3 * n; ++d)
+      if (!free[static_cast<std::size_t>(d)] && !std::isfinite(v[d])) v[d] = 0;
+    // Stage 6: energies.
+    const PointMatrix g_new = support_force();
+    const Eigen::Map<const Eigen::VectorXd> go(g_old.data(), 3 * n), gn(g_new.data(), 3 * n);
+    energy_external_ += 0.5 * (go + gn).dot(u - u_old);
+    energy_internal_ = solid_->strain_energy(state_);
+    energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
+    if (!std::isfinite(energy_internal_ + energy_kinetic_))
+      throw AnalysisError(fmt::format("explicit dynamics: non-finite energy at step {} (t = {:.4g})", step, t));
+    timings_["energy_error"] = (energy_internal_ + energy_kinetic_ - energy_external_ - initial_total) /
+                               std::max({std::abs(initial_total), std::abs(energy_external_), 1e-300});
+    steps_ = step;
+    if (step % every == 0 || step == steps) {
+      sink->output_point(step, t, t / options.end_time);
+      sink->progress(t / options.end_time, fmt::format("step {} t {:.4g} dt {:.3g}", step, t, dt));
+    }
+  }
+  timings_.erase("energy_error");
+  energy_error_ = (energy_internal_ + energy_kinetic_ - energy_external_ - initial_total) /
+                  std::max({std::abs(initial_total), std::abs(energy_external_), 1e-300});
+}
+
+void PeridynamicAnalysis::buckling_modes(int count) {
+  const Index n = body_->nodes();
+  solve::SparseMatrix k0;
+  const PointMatrix reference = linear_solution(k0);
+  const BondState reference_state = solid_->bond_state(reference, true);
+  const solve::SparseMatrix kg = solid_->stiffness(reference_state, false, true);
+  const std::vector<char> free = free_dofs(true);
+  std::vector<Index> map(free.size(), -1);
+  Index dofs = 0;
+  for (std::size_t d = 0; d < free.size(); ++d)
+    if (free[d]) map[d] = dofs++;
+  const solve::SparseMatrix k_upper = reduce_upper(k0, map, dofs), g_upper = reduce_upper(kg, map, dofs);
+  const solve::SparseMatrix k_full = k_upper.selfadjointView<Eigen::Upper>();
+  const solve::SparseMatrix minus_g = -solve::SparseMatrix(g_upper.selfadjointView<Eigen::Upper>());
+  // K0 phi = lambda (-K_G) phi  <=>  (-K_G) phi = (1 / lambda) K0 phi: the largest 1/lambda first.
+  using OpType = Spectra::SparseSymMatProd<Real>;
+  using BOpType = Spectra::SparseCholesky<Real>;
+  OpType op(minus_g);
+  BOpType bop(k_full);
+  if (bop.info() != Spectra::CompInfo::Successful)
+    throw AnalysisError("buckling: the stiffness matrix is not positive definite (rigid-body motion left free?)");
+  const int nev = std::min<int>(count, static_cast<int>(dofs) - 1);
+  const int ncv = std::min<int>(std::max(2 * nev + 1, 40), static_cast<int>(dofs));
+  Spectra::SymGEigsSolver<OpType, BOpType, Spectra::GEigsMode::Cholesky> eigs(op, bop, nev, ncv);
+  eigs.init();
+  eigs.compute(Spectra::SortRule::LargestAlge, 2000, 1e-10);
+  if (eigs.info() != Spectra::CompInfo::Successful) throw AnalysisError("buckling: the eigenvalue solver did not converge");
+  const Eigen::VectorXd mu = eigs.eigenvalues();
+  const Eigen::MatrixXd vectors = eigs.eigenvectors();
+  eigenvalues_.clear();
+  modes_.clear();
+  for (Index k = 0; k < mu.size(); ++k) {
+    if (!(mu[k] > 0)) throw AnalysisError("buckling: the reference load does not compress the structure (no positive load factor)");
+    eigenvalues_.push_back(1.0 / mu[k]);
+    PointMatrix mode = PointMatrix::Zero(3, n);
+    for (std::size_t d = 0; d < free.size(); ++d)
+      if (map[d] >= 0) mode.data()[d] = vectors(map[d], k);
+    const Real largest = mode.colwise().norm().maxCoeff();
+    Index where = 0;
+    mode.colwise().norm().maxCoeff(&where);
+    const Real sign = mode.col(where).sum() < 0 ? -1.0 : 1.0;
+    modes_.push_back(mode * (sign / largest));
+  }
+  u_ = reference;
+  state_ = reference_state;
+  internal_force_ = solid_->internal_force(state_);
+  external_force_ = external_force(1.0);
+}
+
+void PeridynamicAnalysis::run_buckling(OutputSink* sink) {
+  buckling_modes(problem_.buckling.modes);
+  steps_ = 1;
+  sink->output_point(1, 1.0, 1.0);
+}
+
+Index PeridynamicAnalysis::nearest_node(const Vec3& x, const IndexList& candidates) const {
+  Index best = 0;
+  Real best_distance = INFINITY;
+  auto consider = [&](Index i) {
+    const Real d = (problem_.positions.col(i) - x).squaredNorm();
+    if (d < best_distance) {
+      best_distance = d;
+      best = i;
+    }
+  };
+  if (candidates.empty())
+    for (Index i = 0; i < body_->nodes(); ++i) consider(i);
+  else
+    for (Index i : candidates) consider(i);
+  return best;
+}
+
+Vec3 PeridynamicAnalysis::reaction(const IndexList& nodes) const {
+  Vec3 sum = Vec3::Zero();
+  for (Index i : nodes) sum -= internal_force_.col(i) + external_force_.col(i);
+  return sum;
+}
+
+Vec3 PeridynamicAnalysis::strain_gradient_at(Index i, Mat3& gradient) const {
+  Mat3 shape = Mat3::Zero(), deformation = Mat3::Zero();
+  const bool planar = body_->dimension() == 2;
+  for (Index b = body_->first_bond(i); b < body_->end_bond(i); ++b) {
+    const Index j = body_->neighbour(b);
+    Vec3 xi = body_->positions().col(j) - body_->positions().col(i);
+    Vec3 du = u_.col(j) - u_.col(i);
+    if (planar) {
+      xi.z() = 0;
+      du.z() = 0;
+    }
+    shape += body_->bond_volume()[b] * xi * xi.transpose();
+    deformation += body_->bond_volume()[b] * du * xi.transpose();
+  }
+  if (planar) shape(2, 2) = 1.0;
+  gradient = deformation * shape.inverse();
+  return gradient.diagonal();
+}
+
+Real PeridynamicAnalysis::probe(const Probe& p) const {
+  auto component_of = [&](const Vec3& v) {
+    if (p.component == "magnitude") return v.norm();
+    return v[p.component == "x" ? 0 : p.component == "y" ? 1 : 2];
+  };
+  if (p.field == "displacement" || p.field == "velocity") {
+    const Index i = p.at ? nearest_node(*p.at, p.nodes) : p.nodes.front();
+    return component_of(p.field == "displacement" ? Vec3(u_.col(i)) : Vec3(velocity_.col(i)));
+  }
+  if (p.field == "reaction_force") return component_of(reaction(p.nodes));
+  if (p.field == "energy") {
+    if (p.component == "internal") return energy_internal_;
+    if (p.component == "kinetic") return energy_kinetic_;
+    if (p.component == "external") return energy_external_;
+    if (p.component == "damping") return energy_damping_;
+    return energy_internal_ + energy_kinetic_;
+  }
+  if (p.field == "eigenvalue") {
+    const std::size_t k = static_cast<std::size_t>(std::stoi(p.component)) - 1;
+    return k < eigenvalues_.size() ? eigenvalues_[k] : std::nan("");
+  }
+  // strain / stress at the nearest node
+  const Index i = p.at ? nearest_node(*p.at, p.nodes) : p.nodes.front();
+  Mat3 g;
+  strain_gradient_at(i, g);
+  const Mat3 eps = 0.5 * (g + g.transpose());
+  const std::map<std::string, std::pair<int, int>> index{{"xx", {0, 0}}, {"yy", {1, 1}}, {"zz", {2, 2}},
+                                                          {"xy", {0, 1}}, {"yz", {1, 2}}, {"zx", {2, 0}}};
+  if (p.field == "strain") {
+    const auto [a, b] = index.at(p.component);
+    return eps(a, b);
+  }
+  const Real e = problem_.young[i], nu = problem_.poisson[i];
+  const Real mu = e / (2 * (1 + nu)), lambda = e * nu / ((1 + nu) * (1 - 2 * nu));
+  Mat3 sigma;
+  if (body_->options().kinematics == Kinematics::plane_stress) {
+    const Real c = e / (1 - nu * nu);
+    sigma.setZero();
+    sigma(0, 0) = c * (eps(0, 0) + nu * eps(1, 1));
+    sigma(1, 1) = c * (eps(1, 1) + nu * eps(0, 0));
+    sigma(0, 1) = sigma(1, 0) = 2 * mu * eps(0, 1);
+  } else {
+    Mat3 strain = eps;
+    if (body_->dimension() == 2) strain.row(2).setZero(), strain.col(2).setZero();
+    sigma = lambda * strain.trace() * Mat3::Identity() + 2 * mu * strain;
+  }
+  if (p.component == "von_mises") {
+    const Mat3 dev = sigma - sigma.trace() / 3 * Mat3::Identity();
+    return std::sqrt(1.5 * dev.squaredNorm());
+  }
+  const auto [a, b] = index.at(p.component);
+  return sigma(a, b);
+}
+
+std::map<std::string, Real> PeridynamicAnalysis::builtin_probes() const {
+  switch (problem_.analysis) {
+    case PdAnalysisKind::quasi_static:
+      return {{"iterations", static_cast<Real>(last_iterations_)}, {"residual", last_residual_}, {"damping_energy", energy_damping_}};
+    case PdAnalysisKind::explicit_dynamics:
+      return {{"kinetic_energy", energy_kinetic_},
+              {"strain_energy", energy_internal_},
+              {"external_work", energy_external_},
+              {"energy_error", timings_.count("energy_error") ? timings_.at("energy_error") : energy_error_}};
+    case PdAnalysisKind::buckling: {
+      std::map<std::string, Real> values;
+      for (int k = 0; k < problem_.buckling.modes; ++k)
+        values[fmt::format("load_factor_{}", k + 1)] =
+            static_cast<std::size_t>(k) < eigenvalues_.size() ? eigenvalues_[static_cast<std::size_t>(k)] : 0.0;
+      return values;
+    }
+    default: return {};
+  }
+}
+
+OutputFrame PeridynamicAnalysis::frame() const {
+  OutputFrame f;
+  const Index n = body_->nodes();
+  f.points = problem_.positions;
+  auto vector_field = [&](const std::string& name, const PointMatrix& values) {
+    PointField field{name, 3, std::vector<Real>(values.data(), values.data() + values.size())};
+    f.point_fields.push_back(std::move(field));
+  };
+  vector_field("displacement", u_);
+  vector_field("velocity", velocity_);
+  vector_field("internal_force", internal_force_);
+  const Eigen::VectorXd total_dilatation = state_.dilatation.colwise().sum().transpose();
+  PointField dilatation{"dilatation", 1, std::vector<Real>(total_dilatation.data(), total_dilatation.data() + n)};
+  f.point_fields.push_back(std::move(dilatation));
+  for (std::size_t k = 0; k < modes_.size(); ++k) vector_field(fmt::format("mode_{}", k + 1), modes_[k]);
+  return f;
+}
+
+RunCounts PeridynamicAnalysis::counts() const {
+  RunCounts c;
+  c.nodes = body_->nodes();
+  c.dofs = 3 * body_->nodes();
+  c.steps = steps_;
+  return c;
+}
+
+}  // namespace lamina::pd

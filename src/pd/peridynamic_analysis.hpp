@@ -1,0 +1,91 @@
+#pragma once
+// `method: pd` - linearized ordinary state-based peridynamics (seed 002): linear static (CHOLMOD on
+// the stiffness matrix), quasi-static by adaptive dynamic relaxation with displacement-controlled
+// increments, explicit dynamics (velocity Verlet) and linear buckling (Spectra).
+//
+// Results
+//   Probes: displacement / velocity x|y|z|magnitude at the nearest node (or the nearest node of a
+//   set); strain / stress xx..zx (stress also von_mises) at the nearest node from the node's
+//   least-squares displacement gradient over its family and the classical elasticity of its
+//   material; reaction_force x|y|z|magnitude: sum over the selected nodes of -(F_int + F_ext)
+//   (the support forces at prescribed dofs); energy internal|kinetic|external|total|damping;
+//   eigenvalue k (buckling: the k-th load factor of the reference load).
+//   Builtin probes (history.csv): quasi_static: iterations, residual, damping_energy;
+//   explicit: kinetic_energy, strain_energy, external_work, energy_error; buckling: load_factor_k.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/analysis.hpp"
+#include "pd/adaptive_dynamic_relaxation.hpp"
+#include "pd/linear_peridynamic_solid.hpp"
+#include "pd/peridynamic_problem.hpp"
+
+namespace lamina::pd {
+
+class PeridynamicAnalysis : public Analysis {
+ public:
+  /// Checks the probes (InputError for unsupported fields / components).
+  PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes);
+
+  std::string method() const override { return "pd"; }
+  void run(OutputSink& sink) override;
+  Real probe(const Probe& probe) const override;
+  std::map<std::string, Real> builtin_probes() const override;
+  OutputFrame frame() const override;
+  RunCounts counts() const override;
+  std::map<std::string, Real> timings() const override { return timings_; }
+
+  /// Runs without an output sink (tests).
+  void solve();
+
+  const PeridynamicBody& body() const { return *body_; }
+  const LinearPeridynamicSolid& solid() const { return *solid_; }
+  const PointMatrix& displacement() const { return u_; }
+  const PointMatrix& internal_force() const { return internal_force_; }
+  Vec3 reaction(const IndexList& nodes) const;
+  Vec3 strain_gradient_at(Index node, Mat3& gradient) const;
+  const std::vector<Real>& eigenvalues() const { return eigenvalues_; }
+  const std::vector<PointMatrix>& modes() const { return modes_; }
+  Real internal_energy() const { return energy_internal_; }
+  Real kinetic_energy() const { return energy_kinetic_; }
+  Real external_work() const { return energy_external_; }
+  Real damping_energy() const { return energy_damping_; }
+  /// Per-increment ADR iteration counts (quasi_static).
+  const std::vector<int>& increment_iterations() const { return increment_iterations_; }
+
+ private:
+  void build_body(const PointMatrix& positions);
+  PointMatrix external_force(Real factor) const;
+  void apply_prescribed(PointMatrix& u, Real factor, bool velocities) const;
+  Real ramp(int index, Real factor) const;
+  std::vector<char> free_dofs(bool include_velocity) const;
+  void run_linear_static(OutputSink* sink);
+  void run_quasi_static(OutputSink* sink);
+  void run_explicit(OutputSink* sink);
+  void run_buckling(OutputSink* sink);
+  /// Linear static solution at load factor 1 (used by linear_static and buckling).
+  PointMatrix linear_solution(solve::SparseMatrix& k0_upper);
+  /// Buckling load factors and modes of the current body under the reference load.
+  void buckling_modes(int count);
+  Index nearest_node(const Vec3& x, const IndexList& candidates) const;
+  void update_energy();
+
+  PeridynamicProblem problem_;
+  std::vector<Probe> probes_;
+  std::unique_ptr<PeridynamicBody> body_;
+  std::unique_ptr<LinearPeridynamicSolid> solid_;
+  PointMatrix u_, velocity_, internal_force_, external_force_;
+  BondState state_;
+  std::vector<Real> eigenvalues_;
+  std::vector<PointMatrix> modes_;
+  std::vector<int> increment_iterations_;
+  Real energy_internal_ = 0, energy_kinetic_ = 0, energy_external_ = 0, energy_damping_ = 0;
+  Real last_residual_ = 0, energy_error_ = 0;
+  int last_iterations_ = 0;
+  Index steps_ = 0;
+  std::map<std::string, Real> timings_;
+};
+
+}  // namespace lamina::pd

@@ -1,0 +1,349 @@
+#include "pd/peridynamic_body.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "core/error.hpp"
+
+namespace lamina::pd {
+
+namespace {
+
+/// Pseudo-inverse solve of a small symmetric positive semi-definite system (directions the
+/// family cannot sense, e.g. z in a single layer, get no correction instead of a blow-up).
+Eigen::VectorXd solve_gram(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(a);
+  const Eigen::VectorXd& values = eig.eigenvalues();
+  const Real threshold = 1e-12 * std::max(values.cwiseAbs().maxCoeff(), 1e-300);
+  Eigen::VectorXd coefficients = eig.eigenvectors().transpose() * b;
+  for (Index k = 0; k < values.size(); ++k) coefficients[k] = values[k] > threshold ? coefficients[k] / values[k] : 0.0;
+  return eig.eigenvectors() * coefficients;
+}
+
+/// Non-negative least squares min |W (G g - t)|^2, g >= 0, for a handful of unknowns: the best
+/// feasible unconstrained minimiser over all supports (exact KKT enumeration; 2^k - 1 subsets).
+Eigen::VectorXd nonnegative_fit(const Eigen::MatrixXd& g, const Eigen::VectorXd& target, const Eigen::VectorXd& weight) {
+  const Index k = g.cols();
+  const Eigen::MatrixXd wg = weight.asDiagonal() * g;
+  const Eigen::VectorXd wt = weight.cwiseProduct(target);
+  Eigen::VectorXd best = Eigen::VectorXd::Zero(k);
+  Real best_cost = wt.squaredNorm();
+  for (unsigned mask = 1; mask < (1u << k); ++mask) {
+    std::vector<Index> support;
+    for (Index c = 0; c < k; ++c)
+      if (mask & (1u << c)) support.push_back(c);
+    Eigen::MatrixXd a(wg.rows(), static_cast<Index>(support.size()));
+    for (std::size_t c = 0; c < support.size(); ++c) a.col(static_cast<Index>(c)) = wg.col(support[c]);
+    const Eigen::VectorXd x = solve_gram(a.transpose() * a, a.transpose() * wt);
+    if ((x.array() < 0).any()) continue;
+    Eigen::VectorXd full = Eigen::VectorXd::Zero(k);
+    for (std::size_t c = 0; c < support.size(); ++c) full[support[c]] = x[static_cast<Index>(c)];
+    const Real cost = (wg * full - wt).squaredNorm();
+    if (cost < best_cost * (1 - 1e-12)) {
+      best_cost = cost;
+      best = full;
+    }
+  }
+  return best;
+}
+
+/// Quartic monomials of a unit direction: n_a^4 (a < D), then n_a^2 n_b^2 (a < b).
+template <int D>
+Eigen::Matrix<Real, D*(D + 1) / 2, 1> quartic_monomials(const Vec3& n) {
+  Eigen::Matrix<Real, D*(D + 1) / 2, 1> phi;
+  int k = 0;
+  for (int a = 0; a < D; ++a) phi[k++] = n[a] * n[a] * n[a] * n[a];
+  for (int a = 0; a < D; ++a)
+    for (int b = a + 1; b < D; ++b) phi[k++] = n[a] * n[a] * n[b] * n[b];
+  return phi;
+}
+
+}  // namespace
+
+PeridynamicBody::PeridynamicBody(PointMatrix positions, Eigen::VectorXd volumes, const Eigen::VectorXd& young,
+                                 const Eigen::VectorXd& poisson, const BodyOptions& options)
+    : positions_(std::move(positions)), volumes_(std::move(volumes)), options_(options) {
+  if (!(options_.horizon > 0)) throw InputError("discretization.horizon", "a positive horizon", fmt::format("{}", options_.horizon));
+  if (options_.cell_size <= 0) {
+    const Real v = volumes_.size() ? volumes_.mean() : 1.0;
+    options_.cell_size = dimension() == 3 ? std::cbrt(v) : std::sqrt(v);  // 2D: volume per unit... refined below
+  }
+  build_families();
+  calibrate(young, poisson);
+}
+
+void PeridynamicBody::build_families() {
+  const Index n = nodes();
+  const int dim = dimension();
+  const Real reach = options_.partial_volume ? options_.horizon + 0.5 * options_.cell_size : options_.horizon;
+  const Real cutoff = reach * (1.0 + 1e-10);
+  // Cell list with bins of size `reach`.
+  Vec3 lower = positions_.rowwise().minCoeff(), upper = positions_.rowwise().maxCoeff();
+  std::array<Index, 3> bins{1, 1, 1};
+  for (int d = 0; d < dim; ++d) bins[static_cast<std::size_t>(d)] = std::max<Index>(1, static_cast<Index>((upper[d] - lower[d]) / reach) + 1);
+  auto bin_of = [&](const Vec3& p, int d) {
+    return std::clamp<Index>(static_cast<Index>((p[d] - lower[d]) / reach), 0, bins[static_cast<std::size_t>(d)] - 1);
+  };
+  const Index bin_count = bins[0] * bins[1] * bins[2];
+  std::vector<Index> bin_start(static_cast<std::size_t>(bin_count) + 1, 0), bin_nodes(static_cast<std::size_t>(n));
+  std::vector<Index> node_bin(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i) {
+    const Vec3 p = positions_.col(i);
+    const Index b = bin_of(p, 0) + bins[0] * (bin_of(p, 1) + bins[1] * (dim == 3 ? bin_of(p, 2) : 0));
+    node_bin[static_cast<std::size_t>(i)] = b;
+    ++bin_start[static_cast<std::size_t>(b) + 1];
+  }
+  for (Index b = 0; b < bin_count; ++b) bin_start[static_cast<std::size_t>(b) + 1] += bin_start[static_cast<std::size_t>(b)];
+  {
+    std::vector<Index> fill(bin_start.begin(), bin_start.end() - 1);
+    for (Index i = 0; i < n; ++i) bin_nodes[static_cast<std::size_t>(fill[static_cast<std::size_t>(node_bin[static_cast<std::size_t>(i)])]++)] = i;
+  }
+  std::vector<std::vector<std::int32_t>> families(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(dynamic, 64)
+  for (Index i = 0; i < n; ++i) {
+    const Vec3 p = positions_.col(i);
+    const Index bx = bin_of(p, 0), by = bin_of(p, 1), bz = dim == 3 ? bin_of(p, 2) : 0;
+    auto& family = families[static_cast<std::size_t>(i)];
+    for (Index z = std::max<Index>(bz - 1, 0); z <= std::min(bz + 1, bins[2] - 1); ++z)
+      for (Index y = std::max<Index>(by - 1, 0); y <= std::min(by + 1, bins[1] - 1); ++y)
+        for (Index x = std::max<Index>(bx - 1, 0); x <= std::min(bx + 1, bins[0] - 1); ++x) {
+          const Index b = x + bins[0] * (y + bins[1] * z);
+          for (Index k = bin_start[static_cast<std::size_t>(b)]; k < bin_start[static_cast<std::size_t>(b) + 1]; ++k) {
+            const Index j = bin_nodes[static_cast<std::size_t>(k)];
+            if (j == i) continue;
+            Vec3 xi = positions_.col(j) - p;
+            if (dim == 2) xi.z() = 0;
+            if (xi.norm() <= cutoff) family.push_back(static_cast<std::int32_t>(j));
+          }
+        }
+    std::sort(family.begin(), family.end());
+  }
+  family_start_.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (Index i = 0; i < n; ++i)
+    family_start_[static_cast<std::size_t>(i) + 1] = family_start_[static_cast<std::size_t>(i)] + static_cast<Index>(families[static_cast<std::size_t>(i)].size());
+  neighbour_.resize(static_cast<std::size_t>(family_start_.back()));
+  reverse_.resize(neighbour_.size());
+  length_.resize(static_cast<Index>(neighbour_.size()));
+  bond_volume_.resize(length_.size());
+  const Real h = options_.cell_size;
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < n; ++i) {
+    const auto& family = families[static_cast<std::size_t>(i)];
+    for (std::size_t k = 0; k < family.size(); ++k) {
+      const Index b = first_bond(i) + static_cast<Index>(k);
+      const Index j = family[k];
+      neighbour_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(j);
+      Vec3 xi = positions_.col(j) - positions_.col(i);
+      if (dim == 2) xi.z() = 0;
+      const Real x = xi.norm();
+      length_[b] = x;
+      Real beta = 1.0;
+      if (options_.partial_volume) beta = std::clamp((options_.horizon + 0.5 * h - x) / h, 0.0, 1.0);
+      bond_volume_[b] = beta * volumes_[j];
+      const auto& other = families[static_cast<std::size_t>(j)];
+      const auto it = std::lower_bound(other.begin(), other.end(), static_cast<std::int32_t>(i));
+      reverse_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(first_bond(j) + (it - other.begin()));
+    }
+  }
+  Real sum = 0, lo = INFINITY, hi = 0;
+  for (Index i = 0; i < n; ++i) {
+    const Real size = static_cast<Real>(end_bond(i) - first_bond(i));
+    sum += size;
+    lo = std::min(lo, size);
+    hi = std::max(hi, size);
+  }
+  statistics_.mean_family = n ? sum / static_cast<Real>(n) : 0;
+  statistics_.min_family = lo;
+  statistics_.max_family = hi;
+  for (Index i = 0; i < n; ++i)
+    if (end_bond(i) == first_bond(i))
+      throw InputError("discretization.horizon", "a horizon that gives every node at least one neighbour",
+                       fmt::format("node {} at ({:g}, {:g}, {:g}) has none within {:g}", i, positions_(0, i), positions_(1, i),
+                                   positions_(2, i), options_.horizon));
+}
+
+Eigen::MatrixXd PeridynamicBody::classical_stiffness(Index i) const {
+  const Real e = young_[i], nu = poisson_[i];
+  const Real mu = e / (2 * (1 + nu)), lambda = e * nu / ((1 + nu) * (1 - 2 * nu));
+  if (dimension() == 3) {
+    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(6, 6);
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) c(a, b) = lambda;
+      c(a, a) = lambda + 2 * mu;
+      c(a + 3, a + 3) = mu;
+    }
+    return c;
+  }
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3, 3);
+  const bool stress = options_.kinematics == Kinematics::plane_stress;
+  const Real c11 = stress ? e / (1 - nu * nu) : lambda + 2 * mu, c12 = stress ? nu * e / (1 - nu * nu) : lambda;
+  c << c11, c12, 0, c12, c11, 0, 0, 0, mu;
+  return c;
+}
+
+namespace {
+
+struct FamilyFit {
+  Eigen::MatrixXd d;  // column a: d^a
+  Eigen::MatrixXd q;  // dilatation coupling
+  Eigen::VectorXd g;  // bond-modulus coefficients of the quartic monomials
+};
+
+/// Energy matching of one family (see the header): exact dilatations, non-negative bond moduli fitted
+/// to the shear moduli, Q = C_normal - B_normal. Shear targets the family cannot reach without
+/// making Q indefinite are given up step by step (their weight divided by 10).
+FamilyFit fit_family(const Eigen::MatrixXd& moment, const Eigen::MatrixXd& gram, const Eigen::MatrixXd& c, Real mu, int dim) {
+  const int monomials = dim * (dim + 1) / 2;
+  FamilyFit fit;
+  fit.d = Eigen::MatrixXd::Zero(dim, dim);
+  for (int a = 0; a < dim; ++a) fit.d.col(a) = solve_gram(moment, Eigen::VectorXd::Unit(dim, a));
+  Eigen::VectorXd target = Eigen::VectorXd::Zero(monomials), weight(monomials);
+  for (int k = 0; k < monomials; ++k) {
+    target[k] = k < dim ? 0.0 : mu;
+    weight[k] = (k < dim ? 1e-3 : 1.0) / mu;
+  }
+  const Eigen::MatrixXd c_normal = c.topLeftCorner(dim, dim);
+  for (int attempt = 0;; ++attempt) {
+    fit.g = nonnegative_fit(gram, target, weight);
+    const Eigen::VectorXd bsum = gram * fit.g;
+    Eigen::MatrixXd b_normal(dim, dim);
+    int k = dim;
+    for (int a = 0; a < dim; ++a) b_normal(a, a) = bsum[a];
+    for (int a = 0; a < dim; ++a)
+      for (int b = a + 1; b < dim; ++b) b_normal(a, b) = b_normal(b, a) = bsum[k++];
+    fit.q = c_normal - b_normal;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(fit.q);
+    const Real scale = c_normal.norm();
+    if (eig.eigenvalues().minCoeff() >= -1e-9 * scale || attempt == 12) {
+      fit.q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+      return fit;
+    }
+    bool reduced = false;
+    for (int kk = dim; kk < monomials; ++kk)
+      if (std::abs(bsum[kk] - mu) > 0.01 * mu) {
+        weight[kk] *= 0.1;
+        reduced = true;
+      }
+    if (!reduced)
+      for (int a = 0; a < dim; ++a) weight[a] *= 10.0;
+  }
+}
+
+}  // namespace
+
+void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::VectorXd& poisson) {
+  young_ = young;
+  poisson_ = poisson;
+  const Index n = nodes();
+  const int dim = dimension();
+  const int monomials = dim * (dim + 1) / 2;
+  weight_ = Eigen::Matrix3Xd::Zero(3, bonds());
+  coupling_.assign(static_cast<std::size_t>(n), Mat3::Zero());
+  modulus_.resize(bonds());
+  kappa_.resize(n);
+  const Real delta = options_.horizon;
+  const bool energy = options_.surface_correction == SurfaceCorrection::energy;
+  auto direction = [&](Index i, Index b) {
+    Vec3 xi = positions_.col(neighbour(b)) - positions_.col(i);
+    if (dim == 2) xi.z() = 0;
+    return Vec3(xi / length_[b]);
+  };
+  auto omega = [&](Index b) { return options_.influence == Influence::one ? 1.0 : delta / length_[b]; };
+  auto phi = [&](const Vec3& nv) {
+    Eigen::VectorXd p(monomials);
+    if (dim == 3) p = quartic_monomials<3>(nv);
+    else p = quartic_monomials<2>(nv);
+    return p;
+  };
+  // Pass 1: moments of every family.
+  std::vector<Eigen::MatrixXd> moments(static_cast<std::size_t>(n)), grams(static_cast<std::size_t>(n));
+  Eigen::VectorXd weighted_volume(n);
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < n; ++i) {
+    Eigen::MatrixXd moment = Eigen::MatrixXd::Zero(dim, dim), gram = Eigen::MatrixXd::Zero(monomials, monomials);
+    Real m = 0;
+    for (Index b = first_bond(i); b < end_bond(i); ++b) {
+      const Vec3 nv = direction(i, b);
+      const Real s = omega(b) * length_[b] * length_[b] * bond_volume_[b];
+      m += s;
+      Eigen::VectorXd n2(dim);
+      for (int a = 0; a < dim; ++a) n2[a] = nv[a] * nv[a];
+      moment += s * n2 * n2.transpose();
+      const Eigen::VectorXd p = phi(nv);
+      gram += s * p * p.transpose();
+    }
+    moments[static_cast<std::size_t>(i)] = moment;
+    grams[static_cast<std::size_t>(i)] = gram;
+    weighted_volume[i] = m;
+  }
+  // Pass 2: families with equal moments and material share one fit (a lattice has few kinds).
+  std::vector<Index> kind(static_cast<std::size_t>(n));
+  std::vector<Index> representative;
+  if (energy) {
+    std::map<std::string, Index> kinds;
+    for (Index i = 0; i < n; ++i) {
+      std::string key = fmt::format("{:.10g} {:.10g}", young[i], poisson[i]);
+      for (Index k = 0; k < moments[static_cast<std::size_t>(i)].size(); ++k)
+        key += fmt::format(" {:.10g}", moments[static_cast<std::size_t>(i)].data()[k]);
+      for (Index k = 0; k < grams[static_cast<std::size_t>(i)].size(); ++k)
+        key += fmt::format(" {:.10g}", grams[static_cast<std::size_t>(i)].data()[k]);
+      auto [it, inserted] = kinds.emplace(key, static_cast<Index>(representative.size()));
+      if (inserted) representative.push_back(i);
+      kind[static_cast<std::size_t>(i)] = it->second;
+    }
+  }
+  std::vector<FamilyFit> fits(representative.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t k = 0; k < representative.size(); ++k) {
+    const Index i = representative[k];
+    fits[k] = fit_family(moments[static_cast<std::size_t>(i)], grams[static_cast<std::size_t>(i)], classical_stiffness(i),
+                         young[i] / (2 * (1 + poisson[i])), dim);
+  }
+  statistics_.family_kinds = static_cast<Real>(representative.size());
+  // Pass 3: bond weights and moduli.
+  Real max_dilatation_error = 0;
+#pragma omp parallel for schedule(static) reduction(max : max_dilatation_error)
+  for (Index i = 0; i < n; ++i) {
+    const Eigen::MatrixXd c = classical_stiffness(i);
+    const Real mu = young[i] / (2 * (1 + poisson[i]));
+    kappa_[i] = c(0, 1) - mu;
+    const Real m = weighted_volume[i];
+    Eigen::MatrixXd d = Eigen::MatrixXd::Zero(dim, dim), q = Eigen::MatrixXd::Zero(dim, dim);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(monomials);
+    if (energy) {
+      const FamilyFit& fit = fits[static_cast<std::size_t>(kind[static_cast<std::size_t>(i)])];
+      d = fit.d;
+      q = fit.q;
+      g = fit.g;
+    } else {
+      for (int a = 0; a < dim; ++a) d(a, 0) = static_cast<Real>(dim) / m;
+      q(0, 0) = kappa_[i];
+    }
+    coupling_[static_cast<std::size_t>(i)].topLeftCorner(dim, dim) = q;
+    const Real lps_modulus = (dim == 3 ? 15.0 : 8.0) * mu / m;
+    for (Index b = first_bond(i); b < end_bond(i); ++b) {
+      const Vec3 nv = direction(i, b);
+      Eigen::VectorXd n2(dim);
+      for (int a = 0; a < dim; ++a) n2[a] = nv[a] * nv[a];
+      for (int a = 0; a < dim; ++a) weight_(a, b) = omega(b) * length_[b] * d.col(a).dot(n2);
+      modulus_[b] = energy ? omega(b) * g.dot(phi(nv)) : omega(b) * lps_modulus;
+    }
+    for (int a = 0; a < dim; ++a) {
+      Real theta = 0;
+      for (Index b = first_bond(i); b < end_bond(i); ++b) {
+        const Vec3 nv = direction(i, b);
+        theta += weight_.col(b).sum() * length_[b] * nv[a] * nv[a] * bond_volume_[b];
+      }
+      max_dilatation_error = std::max(max_dilatation_error, std::abs(theta - 1.0));
+    }
+  }
+  statistics_.max_dilatation_error = max_dilatation_error;
+  const Real mean = modulus_.size() ? modulus_.mean() : 1.0;
+  statistics_.min_bond_modulus_ratio = modulus_.size() ? modulus_.minCoeff() / mean : 1.0;
+}
+
+}  // namespace lamina::pd

@@ -1,0 +1,83 @@
+#pragma once
+// PeridynamicProblem: everything a `method: pd` analysis needs, translated from the case by the
+// application (this module knows no files and no YAML): nodes, materials, body options,
+// prescribed degrees of freedom, nodal loads, the analysis kind and its solver parameters.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "pd/peridynamic_body.hpp"
+
+namespace lamina::pd {
+
+/// Growth of a prescribed value / load with the analysis parameter (load factor or time).
+using RampFunction = std::function<Real(Real)>;
+
+/// Prescribed displacement (or, for explicit runs, velocity) of one degree of freedom.
+struct PrescribedDof {
+  Index node = 0;
+  int component = 0;
+  Real value = 0.0;           // at ramp factor 1
+  int ramp = -1;              // index into PeridynamicProblem::ramps (-1: linear in the load factor / constant)
+  bool velocity = false;      // explicit: prescribed velocity instead of displacement
+};
+
+/// A nodal force (N) at ramp factor 1.
+struct NodalForce {
+  Index node = 0;
+  Vec3 force = Vec3::Zero();
+  int ramp = -1;
+};
+
+enum class PdAnalysisKind { linear_static, quasi_static, explicit_dynamics, buckling };
+
+/// Adaptive dynamic relaxation parameters (seed 002 section 3).
+struct AdaptiveDynamicRelaxationOptions {
+  int increments = 10;
+  Real tolerance = 1e-5;            // relative: max|R^k| / max|R^0|
+  Real absolute_tolerance = -1.0;   // max|R| (N); < 0: tolerance x max nodal internal/external force
+  int switch_iteration = 2000;      // k_switch: relative test only before it, relative OR absolute after
+  int max_iterations = 20000;
+  int max_cuts = 6;                 // increment halvings before giving up
+  Real density_factor = 1.0;        // lambda_ii = density_factor / 4 dt^2 sum_j |K0_ij|
+  Real velocity_guard = 1e-10;      // 1K_ii = 0 where |Udot_i| < guard |U_i|
+  bool secant_predictor = true;     // start each increment from the extrapolated previous states
+};
+
+struct ExplicitOptions {
+  Real end_time = 1e-3;
+  Real safety_factor = 0.8;
+  Real time_step = 0.0;             // > 0: fixed (checked against the critical step)
+  int outputs = 20;
+  Real damping = 0.0;               // mass-proportional damping (1/s)
+};
+
+struct BucklingOptions {
+  int modes = 3;
+};
+
+/// Geometric imperfection of the reference configuration (stress free).
+struct Imperfection {
+  enum class Kind { none, shape, buckling_mode };
+  Kind kind = Kind::none;
+  PointMatrix shape;               // Kind::shape: displacement field (scaled to amplitude)
+  int mode = 1;                    // Kind::buckling_mode
+  Real amplitude = 0.0;            // largest displacement magnitude of the scaled field
+};
+
+struct PeridynamicProblem {
+  PointMatrix positions;
+  Eigen::VectorXd volumes, young, poisson, density;
+  BodyOptions body;
+  std::vector<PrescribedDof> prescribed;
+  std::vector<NodalForce> forces;
+  PointMatrix initial_velocity;     // empty or 3 x N
+  std::vector<RampFunction> ramps;  // non-linear ramps referred to by index (argument: t / end)
+  PdAnalysisKind analysis = PdAnalysisKind::quasi_static;
+  AdaptiveDynamicRelaxationOptions relaxation;
+  ExplicitOptions explicit_options;
+  BucklingOptions buckling;
+  Imperfection imperfection;
+};
+
+}  // namespace lamina::pd
