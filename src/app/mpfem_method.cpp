@@ -1,0 +1,302 @@
+#include "app/mpfem_method.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "geometry/expression.hpp"
+#include "geometry/generators.hpp"
+#include "mpfem/mpfem_analysis.hpp"
+#include "mpfem/plate_with_hole.hpp"
+
+namespace lamina::app {
+
+namespace {
+
+struct HoleOptions {
+  Real radius = 1.0;
+  Real grading = 1.0;
+};
+
+struct MpfemMethodOptions : MethodOptions {
+  mpfem::MpfemOptions options;
+  std::string neighbours = "auto";
+  std::string particle_strain = "auto";
+  int refine = 1;
+  std::optional<HoleOptions> hole;
+};
+
+std::unique_ptr<MethodOptions> read_mpfem(const io::Case&, const io::NodeReader& section) {
+  auto result = std::make_unique<MpfemMethodOptions>();
+  auto& o = result->options;
+  if (!section.defined()) return result;
+  if (!section.expect_map()) return result;
+  o.plane = section.word("plane", {"stress", "strain"}, "stress") == "strain" ? mpfem::PlaneKind::strain
+                                                                             : mpfem::PlaneKind::stress;
+  o.element = section.word("element", {"five_node", "t3"}, "five_node") == "t3" ? mpfem::ElementKind::t3
+                                                                                : mpfem::ElementKind::five_node;
+  o.stabilization = section.real("stabilization", 0.1, 0.0, 1.0, true, false);
+  result->particle_strain = section.word("particle_strain", {"auto", "cell", "star"}, "auto");
+  result->neighbours = section.word("neighbours", {"auto", "grid", "sectors"}, "auto");
+  o.elements.max_neighbour_distance = section.real("max_neighbour_distance", 3.0, 1.0, 100.0);
+  o.traction_quadrature = section.word("traction_quadrature", {"gauss", "particle"}, "gauss") == "particle"
+                              ? mpfem::TractionQuadrature::particle
+                              : mpfem::TractionQuadrature::gauss;
+  result->refine = static_cast<int>(section.integer("refine", 1, 1, 64));
+  io::NodeReader hole = section.child("hole");
+  if (hole.defined() && hole.expect_map()) {
+    HoleOptions h;
+    h.radius = hole.real("radius", std::nullopt, 0.0, INFINITY, true);
+    h.grading = hole.real("grading", 1.0, 1.0, 4.0);
+    hole.reject_unknown_keys();
+    result->hole = h;
+  }
+  io::NodeReader exact = section.child("exact_displacement");
+  if (exact.defined()) {
+    if (exact.is_sequence() && (exact.node().size() == 2 || exact.node().size() == 3)) {
+      std::array<std::string, 2> e;
+      const auto items = exact.elements();
+      for (std::size_t i = 0; i < 2; ++i) {
+        geometry::ScalarField f = io::read_scalar_field(items[i]);
+        e[i] = f.is_constant() ? fmt::format("{:.17g}", f.constant) : f.expression;
+        try {
+          geometry::Expression check(e[i]);
+        } catch (const geometry::ExpressionError& error) {
+          items[i].error("an expression of x, y", error.what());
+        }
+      }
+      o.exact_displacement = e;
+    } else {
+      exact.error("two expressions [ux, uy] of x, y");
+    }
+  }
+  section.reject_unknown_keys();
+  return result;
+}
+
+/// Resolves the case's selections on a regenerated particle cloud (same rules as build_point_model).
+Model resolve_on(const io::Case& c, PointCloud cloud) {
+  Model model;
+  model.cloud = std::move(cloud);
+  for (const auto& bc : c.boundary) model.boundary_nodes.push_back(resolve_or_throw(bc.select, model.cloud));
+  for (const auto& load : c.loads) model.load_nodes.push_back(resolve_or_throw(load.select, model.cloud));
+  for (const auto& m : c.materials) {
+    if (m.select) model.material_nodes.push_back(resolve_or_throw(*m.select, model.cloud));
+    else model.material_nodes.push_back({});
+  }
+  for (const auto& p : c.probes) {
+    Probe probe;
+    probe.name = p.name;
+    probe.field = p.field;
+    probe.component = p.component;
+    probe.at = p.at;
+    if (p.select) probe.nodes = resolve_or_throw(*p.select, model.cloud);
+    if (p.set) {
+      io::Selection s;
+      s.spec.kind = geometry::SelectionSpec::Kind::set;
+      s.spec.set_name = *p.set;
+      s.location = p.location;
+      s.location.key_path += ".set";
+      probe.nodes = resolve_or_throw(s, model.cloud);
+      probe.nearest_in_set = p.at.has_value();
+    }
+    model.probes.push_back(probe);
+  }
+  return model;
+}
+
+Diagnostic at(const io::SourceLocation& where, const std::string& key, const std::string& expected, const std::string& found) {
+  return Diagnostic{where.file, where.line, where.column, where.key_path + key, expected, found};
+}
+
+std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, const MethodOptions& options) {
+  const auto& o = static_cast<const MpfemMethodOptions&>(options);
+  const io::SourceLocation& disc = c.discretization_location;
+  mpfem::MpfemProblem p;
+  p.options = o.options;
+  const auto& g = c.geometry;
+  switch (g.type) {
+    case geometry::GeometryType::box:
+      p.thickness = g.max.z() - g.min.z();
+      p.z_mid = 0.5 * (g.max.z() + g.min.z());
+      break;
+    case geometry::GeometryType::plate: p.thickness = g.thickness, p.z_mid = 0; break;
+    case geometry::GeometryType::curved_beam:
+      p.thickness = g.z_range[1] - g.z_range[0];
+      p.z_mid = 0.5 * (g.z_range[0] + g.z_range[1]);
+      break;
+    case geometry::GeometryType::annulus: p.thickness = g.thickness, p.z_mid = 0.5 * g.thickness; break;
+    case geometry::GeometryType::mesh: p.thickness = g.thickness > 0 ? g.thickness : 1.0, p.z_mid = 0; break;
+    default:
+      throw InputError(at(c.geometry_location, ".type", "box, plate, curved_beam, annulus or mesh (mpfem is 2D in x-y)",
+                          geometry::to_string(g.type)));
+  }
+  const bool generated = c.discretization.particles.has_value() && g.type != geometry::GeometryType::mesh;
+  const bool jitter = c.discretization.jitter && c.discretization.jitter->amount > 0;
+
+  // the particle cloud: the model's, or regenerated (refine, hole)
+  Model regenerated;
+  const Model* model = &given;
+  std::array<int, 2> counts{0, 0};
+  if (generated) counts = *c.discretization.particles;
+  if (o.hole || o.refine != 1) {
+    if (!generated)
+      throw InputError(at(disc, ".particles", "particle counts [n0, n1] (mpfem.refine and mpfem.hole regenerate them)",
+                          "a particle file or mesh"));
+    if (jitter)
+      throw InputError(at(disc, ".jitter", "no jitter together with mpfem.refine or mpfem.hole", "a jitter"));
+    for (auto& n : counts) n = o.refine * (n - 1) + 1;
+    if (static_cast<double>(counts[0]) * counts[1] > 1e7)
+      throw InputError(Diagnostic{c.file, 0, 0, "mpfem.refine", "at most 10000000 particles after refinement",
+                                  fmt::format("{} x {}", counts[0], counts[1])});
+    PointCloud cloud;
+    if (o.hole) {
+      if (g.type != geometry::GeometryType::box)
+        throw InputError(at(c.geometry_location, ".type", "box (mpfem.hole cuts a quarter hole at its min corner)",
+                            geometry::to_string(g.type)));
+      mpfem::PlateWithHoleSpec spec;
+      spec.origin = mpfem::Vec2(g.min.x(), g.min.y());
+      spec.width = g.max.x() - g.min.x();
+      spec.height = g.max.y() - g.min.y();
+      spec.radius = o.hole->radius;
+      spec.grading = o.hole->grading;
+      spec.n_radial = counts[0];
+      spec.n_angular = counts[1];
+      mpfem::GeneratedParticles particles = mpfem::generate_plate_with_hole(spec);
+      const Index n = particles.layout.positions.cols();
+      cloud.positions.resize(3, n);
+      cloud.positions.topRows(2) = particles.layout.positions;
+      cloud.positions.row(2).setConstant(p.z_mid);
+      cloud.volumes = particles.area * p.thickness;
+      cloud.counts = {counts[0], counts[1], 1};
+      cloud.sets = particles.sets;
+    } else {
+      cloud = geometry::generate_volume_nodes(g, {counts[0], counts[1], 1});
+    }
+    regenerated = resolve_on(c, std::move(cloud));
+    model = &regenerated;
+  }
+  const Index n = model->cloud.size();
+  p.layout.positions = model->cloud.positions.topRows(2);
+  if (generated) {
+    const bool periodic = g.type == geometry::GeometryType::annulus && !g.slit;
+    p.layout.grid = mpfem::LogicalGrid{counts[0], counts[1], periodic};
+    if (static_cast<Index>(counts[0]) * counts[1] != n) p.layout.grid.reset();
+  }
+  if (o.neighbours == "grid") {
+    if (!p.layout.grid)
+      throw InputError(Diagnostic{c.file, 0, 0, "mpfem.neighbours",
+                                  "neighbours: sectors (or auto) for particles without a generator grid", "grid"});
+    p.options.elements.rule = mpfem::NeighbourRule::logical_grid;
+  } else if (o.neighbours == "sectors") {
+    p.options.elements.rule = mpfem::NeighbourRule::sectors;
+  } else {
+    p.options.elements.rule = p.layout.grid ? mpfem::NeighbourRule::logical_grid : mpfem::NeighbourRule::sectors;
+  }
+
+  const bool grid_rule = p.options.elements.rule == mpfem::NeighbourRule::logical_grid;
+  if (o.particle_strain == "cell" && !grid_rule)
+    throw InputError(Diagnostic{c.file, 0, 0, "mpfem.particle_strain",
+                                "particle_strain: star (or auto) for particles without a generator grid / neighbours: sectors",
+                                "cell"});
+  p.options.particle_strain = o.particle_strain == "star" || !grid_rule ? mpfem::ParticleStrain::star
+                                                                        : mpfem::ParticleStrain::cell;
+  std::vector<Diagnostic> problems;
+  // materials: each particle takes the first material whose selection holds there
+  p.material_of_particle.assign(static_cast<std::size_t>(n), -1);
+  for (std::size_t i = 0; i < c.materials.size(); ++i) {
+    const auto& m = c.materials[i];
+    io::SourceLocation where{c.file, 0, 0, fmt::format("materials.{}", i)};
+    if (m.spec.model != material::MaterialModel::linear_elastic) {
+      problems.push_back(at(where, ".model", "linear_elastic (mpfem is a linear analysis)", "another model"));
+      continue;
+    }
+    p.materials.push_back(material::LinearElastic{m.spec.E, m.spec.nu});
+    const int id = static_cast<int>(p.materials.size() - 1);
+    if (m.select) {
+      for (Index q : model->material_nodes[i])
+        if (p.material_of_particle[static_cast<std::size_t>(q)] < 0) p.material_of_particle[static_cast<std::size_t>(q)] = id;
+    } else {
+      for (auto& q : p.material_of_particle)
+        if (q < 0) q = id;
+    }
+  }
+  if (problems.empty())
+    for (Index q = 0; q < n; ++q)
+      if (p.material_of_particle[static_cast<std::size_t>(q)] < 0) {
+        problems.push_back(Diagnostic{c.file, 0, 0, "materials",
+                                      "a material for every particle (add one without select:)",
+                                      fmt::format("particle {} without a material", q)});
+        break;
+      }
+
+  // essential conditions on particle dofs
+  for (std::size_t i = 0; i < c.boundary.size(); ++i) {
+    const auto& b = c.boundary[i];
+    if (b.velocity[0] || b.velocity[1] || b.velocity[2]) {
+      problems.push_back(at(b.location, ".velocity", "fix, symmetry or displacement (velocity is for explicit methods)", "velocity"));
+      continue;
+    }
+    bool any = false;
+    for (int a = 0; a < 2; ++a) {
+      const bool fixed = b.fixed[static_cast<std::size_t>(a)];
+      const auto& value = b.displacement[static_cast<std::size_t>(a)];
+      if (!fixed && !value) continue;
+      any = true;
+      std::optional<geometry::Expression> expression;
+      if (value && !value->is_constant()) expression.emplace(value->expression);
+      for (Index q : model->boundary_nodes[i]) {
+        mpfem::PrescribedDof d;
+        d.particle = q;
+        d.component = a;
+        if (value) d.value = expression ? expression->evaluate(model->cloud.point(q), 1.0) : value->constant;
+        if (!std::isfinite(d.value)) {
+          problems.push_back(at(b.location, ".displacement", "a finite prescribed displacement",
+                                fmt::format("{} at particle {}", d.value, q)));
+          break;
+        }
+        p.prescribed.push_back(d);
+      }
+    }
+    if (!any)
+      problems.push_back(at(b.location, ".fix", "x or y (mpfem is 2D: z and rotations are ignored)", "neither x nor y"));
+  }
+
+  // loads
+  for (std::size_t i = 0; i < c.loads.size(); ++i) {
+    const auto& l = c.loads[i];
+    mpfem::MpfemLoad load;
+    load.particles = model->load_nodes[i];
+    load.vector = {l.vector[0], l.vector[1]};
+    load.scalar = l.scalar;
+    load.label = fmt::format("loads.{}", i);
+    switch (l.kind) {
+      case io::Load::Kind::force: load.kind = mpfem::MpfemLoad::Kind::force; break;
+      case io::Load::Kind::traction: load.kind = mpfem::MpfemLoad::Kind::traction; break;
+      case io::Load::Kind::pressure: load.kind = mpfem::MpfemLoad::Kind::pressure; break;
+      case io::Load::Kind::body_force: load.kind = mpfem::MpfemLoad::Kind::body_force; break;
+      default:
+        problems.push_back(at(l.location, "", "force, traction, pressure or body_force (mpfem is a static analysis)",
+                              "mass or initial_velocity"));
+        continue;
+    }
+    if (load.kind != mpfem::MpfemLoad::Kind::pressure && !(l.vector[2].is_constant() && l.vector[2].constant == 0.0)) {
+      problems.push_back(at(l.location, ".2", "a zero z component (mpfem is 2D in x-y)",
+                            l.vector[2].is_constant() ? fmt::format("{}", l.vector[2].constant) : l.vector[2].expression));
+      continue;
+    }
+    p.loads.push_back(load);
+  }
+  if (!problems.empty()) throw InputError(problems);
+  return std::make_unique<mpfem::MpfemAnalysis>(std::move(p), model->probes);
+}
+
+}  // namespace
+
+MethodEntry mpfem_method_entry() {
+  return MethodEntry{io::MethodKeys{"mpfem", {"particles", "jitter"}, true},
+                     "moving particle finite element method, 2D linear elastostatics (seed 001)", read_mpfem, create_mpfem};
+}
+
+}  // namespace lamina::app

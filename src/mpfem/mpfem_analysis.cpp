@@ -1,0 +1,764 @@
+#include "mpfem/mpfem_analysis.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "core/error.hpp"
+
+namespace lamina::mpfem {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+constexpr int kElementDofs = 2 * kElementNodes;
+using ElementStrainOperator = Eigen::Matrix<Real, 3, kElementDofs>;
+using ElementStiffness = Eigen::Matrix<Real, kElementDofs, kElementDofs>;
+
+/// Strain operator [exx, eyy, gxy] of the element's dofs (u_x, u_y per local node).
+ElementStrainOperator strain_operator(const ElementGradient& g) {
+  ElementStrainOperator b = ElementStrainOperator::Zero();
+  for (int a = 0; a < kElementNodes; ++a) {
+    b(0, 2 * a) = g(0, a);
+    b(1, 2 * a + 1) = g(1, a);
+    b(2, 2 * a) = g(1, a);
+    b(2, 2 * a + 1) = g(0, a);
+  }
+  return b;
+}
+
+Eigen::Matrix<Real, 3, 6> triangle_strain_operator(const Eigen::Matrix<Real, 2, 3>& g) {
+  Eigen::Matrix<Real, 3, 6> b = Eigen::Matrix<Real, 3, 6>::Zero();
+  for (int a = 0; a < 3; ++a) {
+    b(0, 2 * a) = g(0, a);
+    b(1, 2 * a + 1) = g(1, a);
+    b(2, 2 * a) = g(1, a);
+    b(2, 2 * a + 1) = g(0, a);
+  }
+  return b;
+}
+
+/// Evaluates a constant-or-expression field (serial use only).
+class FieldEvaluator {
+ public:
+  explicit FieldEvaluator(const geometry::ScalarField& f) : constant_(f.constant) {
+    if (!f.is_constant()) expression_.emplace(f.expression);
+  }
+  Real operator()(const Vec3& x) const { return expression_ ? expression_->evaluate(x, 1.0) : constant_; }
+
+ private:
+  Real constant_;
+  std::optional<geometry::Expression> expression_;
+};
+
+/// Dunavant's 6-point rule (degree 4) on a triangle: barycentric points and weights (sum 1).
+struct TrianglePoint {
+  std::array<Real, 3> bary;
+  Real weight;
+};
+const std::array<TrianglePoint, 6>& triangle_rule() {
+  static const std::array<TrianglePoint, 6> rule = [] {
+    const Real a = 0.445948490915965, wa = 0.223381589678011;
+    const Real b = 0.091576213509771, wb = 0.109951743655322;
+    return std::array<TrianglePoint, 6>{TrianglePoint{{a, a, 1 - 2 * a}, wa}, TrianglePoint{{a, 1 - 2 * a, a}, wa},
+                                        TrianglePoint{{1 - 2 * a, a, a}, wa}, TrianglePoint{{b, b, 1 - 2 * b}, wb},
+                                        TrianglePoint{{b, 1 - 2 * b, b}, wb}, TrianglePoint{{1 - 2 * b, b, b}, wb}};
+  }();
+  return rule;
+}
+
+material::Voigt to_voigt(const Eigen::Vector3d& in_plane, Real zz) {
+  material::Voigt v = material::Voigt::Zero();
+  v << in_plane[0], in_plane[1], zz, in_plane[2], 0, 0;
+  return v;
+}
+
+const std::map<std::string, int> kVector{{"x", 0}, {"y", 1}, {"z", 2}};
+const std::map<std::string, int> kTensor{{"xx", 0}, {"yy", 1}, {"zz", 2}, {"xy", 3}, {"yz", 4}, {"zx", 5}};
+
+}  // namespace
+
+Eigen::Matrix3d PlaneMaterial::matrix() const {
+  const Real E = elastic.E, nu = elastic.nu;
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+  if (plane == PlaneKind::stress) {
+    const Real f = E / (1 - nu * nu);
+    c << f, f * nu, 0, f * nu, f, 0, 0, 0, f * (1 - nu) / 2;
+  } else {
+    const Real l = elastic.lambda(), m = elastic.mu();
+    c << l + 2 * m, l, 0, l, l + 2 * m, 0, 0, 0, m;
+  }
+  return c;
+}
+
+Real PlaneMaterial::out_of_plane(const Eigen::Vector3d& strain) const {
+  if (plane == PlaneKind::stress) return -elastic.nu / (1 - elastic.nu) * (strain[0] + strain[1]);
+  return elastic.lambda() * (strain[0] + strain[1]);
+}
+
+MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes)
+    : problem_(std::move(problem)), probes_(std::move(probes)) {
+  const auto start = Clock::now();
+  const Index n = problem_.layout.positions.cols();
+  if (problem_.materials.empty()) throw InputError("materials", "at least one linear_elastic material", "none");
+  if (static_cast<Index>(problem_.material_of_particle.size()) != n)
+    problem_.material_of_particle.assign(static_cast<std::size_t>(n), 0);
+  for (const auto& m : problem_.materials) materials_.push_back(PlaneMaterial{m, problem_.options.plane});
+  if (!(problem_.thickness > 0) || !std::isfinite(problem_.thickness))
+    throw InputError("geometry", "a positive z extent (the out-of-plane thickness)", fmt::format("{}", problem_.thickness));
+  if (problem_.options.element == ElementKind::t3 && !problem_.layout.grid)
+    throw InputError("mpfem.element", "element: five_node for particle sets without a generator grid (t3 triangulates the grid)",
+                     "element: t3");
+  discretization_ = build_particle_elements(problem_.layout, problem_.options.elements);
+  cell_strain_ = problem_.options.element == ElementKind::five_node &&
+                 problem_.options.particle_strain == ParticleStrain::cell;
+  if (cell_strain_) {
+    if (!problem_.layout.grid || discretization_.rule != NeighbourRule::logical_grid)
+      throw InputError("mpfem.particle_strain",
+                       "particle_strain: star for particle sets without a generator grid (or neighbours: sectors)", "cell");
+    build_cell_operators();
+  }
+  if (problem_.options.element == ElementKind::t3) {
+    discretization_.area_weight.setZero();
+    for (const auto& t : grid_triangles())
+      for (Index p : t.nodes) discretization_.area_weight[p] += t.area / 3;
+  }
+  for (const auto& p : probes_) {
+    const bool vector_field = p.field == "displacement" || p.field == "reaction_force";
+    const bool tensor_field = p.field == "stress" || p.field == "strain";
+    if (vector_field) {
+      if (!kVector.count(p.component) && p.component != "magnitude")
+        throw InputError("probes." + p.name, "component x, y, z or magnitude", p.component);
+      if (p.field == "reaction_force" && p.nodes.empty())
+        throw InputError("probes." + p.name, "a select: for reaction_force", "none");
+      if (p.field == "displacement" && !p.at && p.nodes.empty())
+        throw InputError("probes." + p.name, "at: [x, y, z] or a selection", "neither");
+    } else if (tensor_field) {
+      if (!kTensor.count(p.component) && !(p.field == "stress" && p.component == "von_mises"))
+        throw InputError("probes." + p.name, "component xx, yy, zz, xy, yz, zx (stress also von_mises)", p.component);
+      if (!p.at && p.nodes.empty()) throw InputError("probes." + p.name, "at: [x, y, z] or a selection", "neither");
+    } else if (p.field == "energy") {
+      if (p.component != "internal" && p.component != "external" && p.component != "kinetic" && p.component != "total")
+        throw InputError("probes." + p.name, "energy component internal, external, kinetic or total", p.component);
+    } else {
+      throw InputError("probes." + p.name,
+                       "field displacement, strain, stress, reaction_force or energy (mpfem is a linear static analysis)",
+                       p.field);
+    }
+  }
+  timings_["setup_s"] = seconds_since(start);
+}
+
+void MpfemAnalysis::rebuild(const Points2& positions) {
+  if (positions.cols() != problem_.layout.positions.cols())
+    throw InputError("mpfem", fmt::format("{} particle positions", problem_.layout.positions.cols()),
+                     fmt::format("{}", positions.cols()));
+  problem_.layout.positions = positions;
+  discretization_ = build_particle_elements(problem_.layout, problem_.options.elements);
+  if (cell_strain_) build_cell_operators();
+  solved_ = false;
+}
+
+std::vector<MpfemAnalysis::Triangle> MpfemAnalysis::grid_triangles() const {
+  const auto& g = *problem_.layout.grid;
+  const Points2& x = problem_.layout.positions;
+  std::vector<Triangle> result;
+  const int cells1 = g.periodic1 ? g.n1 : g.n1 - 1;
+  for (int j = 0; j < cells1; ++j)
+    for (int i = 0; i + 1 < g.n0; ++i) {
+      auto id = [&](int a, int b) { return static_cast<Index>(a) + static_cast<Index>(g.n0) * (b % g.n1); };
+      const Index a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      for (const auto& nodes : {std::array<Index, 3>{a, b, c}, std::array<Index, 3>{a, c, d}}) {
+        Triangle t;
+        t.nodes = nodes;
+        t.gradient = triangle_gradient(x.col(nodes[0]), x.col(nodes[1]), x.col(nodes[2]), t.area);
+        t.weight = 1.0;
+        if (!(t.area > 0))
+          throw InputError("discretization.particles", "a particle grid whose cells are not tangled (t3 reference)",
+                           fmt::format("an inverted triangle at particles {}, {}, {}", nodes[0], nodes[1], nodes[2]));
+        result.push_back(t);
+      }
+    }
+  return result;
+}
+
+std::vector<MpfemAnalysis::Triangle> MpfemAnalysis::error_triangles() const {
+  if (problem_.options.element == ElementKind::t3) return grid_triangles();
+  std::vector<Triangle> result;
+  for (const auto& e : discretization_.elements)
+    for (int k = 0; k < e.triangle_count; ++k) {
+      const auto& tri = e.triangles[static_cast<std::size_t>(k)];
+      Triangle t;
+      for (int v = 0; v < 3; ++v) {
+        t.nodes[static_cast<std::size_t>(v)] = e.nodes[static_cast<std::size_t>(tri.local[static_cast<std::size_t>(v)])];
+        t.gradient.col(v) = tri.gradient.col(tri.local[static_cast<std::size_t>(v)]);
+      }
+      t.area = tri.area;
+      t.weight = 1.0 / discretization_.covering;
+      result.push_back(t);
+    }
+  return result;
+}
+
+namespace {
+
+Eigen::Matrix<Real, 3, 2> gradient_block(const Vec2& g) {
+  Eigen::Matrix<Real, 3, 2> b;
+  b << g.x(), 0, 0, g.y(), g.y(), g.x();
+  return b;
+}
+
+void add_block(std::vector<std::pair<Index, Eigen::Matrix<Real, 3, 2>>>& list, Index particle,
+               const Eigen::Matrix<Real, 3, 2>& block) {
+  for (auto& [p, b] : list)
+    if (p == particle) {
+      b += block;
+      return;
+    }
+  list.emplace_back(particle, block);
+}
+
+}  // namespace
+
+void MpfemAnalysis::build_cell_operators() {
+  cells_ = build_tributary_cells(problem_.layout);
+  const Index n = problem_.layout.positions.cols();
+  discretization_.area_weight = cells_.area;
+  cell_strain_ops_.assign(static_cast<std::size_t>(n), {});
+  strain_gradient_.assign(static_cast<std::size_t>(n), {});
+  for (Index p = 0; p < n; ++p)
+    for (const auto& [q, g] : cells_.mean_gradient[static_cast<std::size_t>(p)])
+      cell_strain_ops_[static_cast<std::size_t>(p)].emplace_back(q, gradient_block(g));
+#pragma omp parallel for schedule(static)
+  for (Index p = 0; p < n; ++p) {
+    const ParticleElement& e = discretization_.elements[static_cast<std::size_t>(p)];
+    // the five-node element on the cell centroids (falls back to the particles if it folds)
+    ElementGradient d = ElementGradient::Zero();
+    Real area = 0;
+    bool folded = false;
+    for (int t = 0; t < e.triangle_count; ++t) {
+      const auto& tri = e.triangles[static_cast<std::size_t>(t)];
+      std::array<Vec2, 3> c;
+      for (int k = 0; k < 3; ++k)
+        c[static_cast<std::size_t>(k)] = cells_.centroid.col(e.nodes[static_cast<std::size_t>(tri.local[static_cast<std::size_t>(k)])]);
+      Real a = 0;
+      const Eigen::Matrix<Real, 2, 3> g = triangle_gradient(c[0], c[1], c[2], a);
+      if (!(a > 0)) {
+        folded = true;
+        break;
+      }
+      for (int k = 0; k < 3; ++k) d.col(tri.local[static_cast<std::size_t>(k)]) += a * g.col(k);
+      area += a;
+    }
+    d = folded ? e.mean_gradient : ElementGradient(d / area);
+    for (int axis = 0; axis < 2; ++axis) {
+      auto& g = strain_gradient_[static_cast<std::size_t>(p)][static_cast<std::size_t>(axis)];
+      for (int a = 0; a < kElementNodes; ++a) {
+        const Index j = e.nodes[static_cast<std::size_t>(a)];
+        if (j < 0 || d(axis, a) == 0.0) continue;
+        for (const auto& [q, block] : cell_strain_ops_[static_cast<std::size_t>(j)]) add_block(g, q, d(axis, a) * block);
+      }
+    }
+  }
+}
+
+void MpfemAnalysis::assemble_cell_stiffness(std::vector<Eigen::Triplet<Real, int>>& triplets) const {
+  const Index n = problem_.layout.positions.cols();
+  const Real thickness = problem_.thickness, beta = problem_.options.stabilization;
+  constexpr Index kChunk = 512;
+  for (Index begin = 0; begin < n; begin += kChunk) {
+    const Index end = std::min(n, begin + kChunk);
+    std::vector<IndexList> particles(static_cast<std::size_t>(end - begin));
+    std::vector<Eigen::MatrixXd> local(static_cast<std::size_t>(end - begin));
+#pragma omp parallel for schedule(static)
+    for (Index p = begin; p < end; ++p) {
+      const ParticleElement& e = discretization_.elements[static_cast<std::size_t>(p)];
+      IndexList& list = particles[static_cast<std::size_t>(p - begin)];
+      auto slot = [&](Index q) {
+        for (std::size_t k = 0; k < list.size(); ++k)
+          if (list[k] == q) return static_cast<Index>(k);
+        list.push_back(q);
+        return static_cast<Index>(list.size() - 1);
+      };
+      const auto& b_ops = cell_strain_ops_[static_cast<std::size_t>(p)];
+      const auto& g_ops = strain_gradient_[static_cast<std::size_t>(p)];
+      for (const auto& [q, block] : b_ops) slot(q);
+      for (const auto& ops : g_ops)
+        for (const auto& [q, block] : ops) slot(q);
+      for (Index q : e.nodes)
+        if (q >= 0) slot(q);
+      const Index m = static_cast<Index>(list.size());
+      auto dense = [&](const StrainBlocks& ops) {
+        Eigen::MatrixXd b = Eigen::MatrixXd::Zero(3, 2 * m);
+        for (const auto& [q, block] : ops) b.middleCols<2>(2 * slot(q)) += block;
+        return b;
+      };
+      const Eigen::Matrix3d c =
+          materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(p)])].matrix();
+      const Real omega = cells_.area[p];
+      const Eigen::MatrixXd b = dense(b_ops);
+      const std::array<Eigen::MatrixXd, 2> g{dense(g_ops[0]), dense(g_ops[1])};
+      const Eigen::Matrix2d& moment = cells_.second_moment[static_cast<std::size_t>(p)];
+      Eigen::MatrixXd k = omega * b.transpose() * c * b;
+      for (int a = 0; a < 2; ++a)
+        for (int bb = 0; bb < 2; ++bb) k += moment(a, bb) * g[static_cast<std::size_t>(a)].transpose() * c * g[static_cast<std::size_t>(bb)];
+      for (int t = 0; t < e.triangle_count; ++t) {
+        const auto& tri = e.triangles[static_cast<std::size_t>(t)];
+        Eigen::MatrixXd deviation = -b;
+        for (int a = 0; a < kElementNodes; ++a) {
+          const Index q = e.nodes[static_cast<std::size_t>(a)];
+          if (q >= 0) deviation.middleCols<2>(2 * slot(q)) += gradient_block(tri.gradient.col(a));
+        }
+        k += (beta * omega * tri.area / e.area) * deviation.transpose() * c * deviation;
+      }
+      local[static_cast<std::size_t>(p - begin)] = thickness * k;
+    }
+    for (Index p = begin; p < end; ++p) {
+      const IndexList& list = particles[static_cast<std::size_t>(p - begin)];
+      const Eigen::MatrixXd& k = local[static_cast<std::size_t>(p - begin)];
+      for (std::size_t a = 0; a < list.size(); ++a)
+        for (std::size_t bb = 0; bb < list.size(); ++bb)
+          for (int r = 0; r < 2; ++r)
+            for (int s = 0; s < 2; ++s)
+              triplets.emplace_back(static_cast<int>(2 * list[a] + r), static_cast<int>(2 * list[bb] + s),
+                                    k(static_cast<Index>(2 * a) + r, static_cast<Index>(2 * bb) + s));
+    }
+  }
+}
+
+Eigen::VectorXd MpfemAnalysis::load_vector() const {
+  const Points2& x = problem_.layout.positions;
+  const Index n = x.cols();
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(2 * n);
+  const Real thickness = problem_.thickness;
+  auto at3 = [&](const Vec2& p) { return Vec3(p.x(), p.y(), problem_.z_mid); };
+  for (const auto& load : problem_.loads) {
+    std::set<Index> selected(load.particles.begin(), load.particles.end());
+    if (load.kind == MpfemLoad::Kind::force) {
+      const FieldEvaluator fx(load.vector[0]), fy(load.vector[1]);
+      const Real share = 1.0 / static_cast<Real>(load.particles.size());
+      for (Index p : load.particles) {
+        f[2 * p] += share * fx(at3(x.col(p)));
+        f[2 * p + 1] += share * fy(at3(x.col(p)));
+      }
+    } else if (load.kind == MpfemLoad::Kind::body_force) {
+      const FieldEvaluator bx(load.vector[0]), by(load.vector[1]);
+      for (Index p : load.particles) {
+        const Real dv = thickness * discretization_.area_weight[p];
+        f[2 * p] += dv * bx(at3(x.col(p)));
+        f[2 * p + 1] += dv * by(at3(x.col(p)));
+      }
+    } else {
+      const bool pressure = load.kind == MpfemLoad::Kind::pressure;
+      const FieldEvaluator tx(load.vector[0]), ty(load.vector[1]), pr(load.scalar);
+      auto traction = [&](const Vec2& p, const Vec2& normal) -> Vec2 {
+        if (pressure) return -pr(at3(p)) * normal;
+        return Vec2(tx(at3(p)), ty(at3(p)));
+      };
+      int segments = 0;
+      for (const auto& s : discretization_.boundary) {
+        if (!selected.count(s.a) || !selected.count(s.b)) continue;
+        ++segments;
+        const Vec2 xa = x.col(s.a), xb = x.col(s.b);
+        if (problem_.options.traction_quadrature == TractionQuadrature::particle) {
+          // seed eq (6): t(x_I) dS_I, dS_I = half of each selected segment at I
+          f.segment<2>(2 * s.a) += traction(xa, s.normal) * 0.5 * s.length * thickness;
+          f.segment<2>(2 * s.b) += traction(xb, s.normal) * 0.5 * s.length * thickness;
+        } else {
+          for (Real g : {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)}) {
+            const Vec2 t = traction((1 - g) * xa + g * xb, s.normal) * 0.5 * s.length * thickness;
+            f.segment<2>(2 * s.a) += (1 - g) * t;
+            f.segment<2>(2 * s.b) += g * t;
+          }
+        }
+      }
+      if (segments == 0)
+        throw InputError(load.label + ".select",
+                         "a selection containing two adjacent boundary particles (traction and pressure act on "
+                         "boundary segments between selected particles)",
+                         fmt::format("{} particle(s), no boundary segment", load.particles.size()));
+    }
+  }
+  return f;
+}
+
+void MpfemAnalysis::assemble_and_solve() {
+  const auto start = Clock::now();
+  const Points2& x = problem_.layout.positions;
+  const Index n = x.cols();
+  const Real thickness = problem_.thickness;
+  std::vector<Eigen::Triplet<Real, int>> triplets;
+  if (cell_strain_) {
+    assemble_cell_stiffness(triplets);
+  } else if (problem_.options.element == ElementKind::five_node) {
+    const Real beta = problem_.options.stabilization;
+    std::vector<ElementStiffness> local(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+    for (Index p = 0; p < n; ++p) {
+      const ParticleElement& e = discretization_.elements[static_cast<std::size_t>(p)];
+      const Eigen::Matrix3d c = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(p)])].matrix();
+      const Real dv = thickness * discretization_.area_weight[p];
+      const ElementStrainOperator mean = strain_operator(e.mean_gradient);
+      ElementStiffness k = dv * mean.transpose() * c * mean;
+      for (int t = 0; t < e.triangle_count; ++t) {
+        const auto& tri = e.triangles[static_cast<std::size_t>(t)];
+        const ElementStrainOperator deviation = strain_operator(tri.gradient) - mean;
+        k += (beta * dv * tri.area / e.area) * deviation.transpose() * c * deviation;
+      }
+      local[static_cast<std::size_t>(p)] = k;
+    }
+    triplets.reserve(static_cast<std::size_t>(n) * 100);
+    for (Index p = 0; p < n; ++p) {
+      const ParticleElement& e = discretization_.elements[static_cast<std::size_t>(p)];
+      const ElementStiffness& k = local[static_cast<std::size_t>(p)];
+      for (int a = 0; a < kElementNodes; ++a) {
+        const Index ja = e.nodes[static_cast<std::size_t>(a)];
+        if (ja < 0) continue;
+        for (int b = 0; b < kElementNodes; ++b) {
+          const Index jb = e.nodes[static_cast<std::size_t>(b)];
+          if (jb < 0) continue;
+          for (int r = 0; r < 2; ++r)
+            for (int s = 0; s < 2; ++s)
+              triplets.emplace_back(static_cast<int>(2 * ja + r), static_cast<int>(2 * jb + s), k(2 * a + r, 2 * b + s));
+        }
+      }
+    }
+  } else {
+    for (const auto& t : grid_triangles()) {
+      const Eigen::Matrix3d c = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(t.nodes[0])])].matrix();
+      const Eigen::Matrix<Real, 3, 6> b = triangle_strain_operator(t.gradient);
+      const Eigen::Matrix<Real, 6, 6> k = (thickness * t.area) * b.transpose() * c * b;
+      for (int a = 0; a < 3; ++a)
+        for (int bb = 0; bb < 3; ++bb)
+          for (int r = 0; r < 2; ++r)
+            for (int s = 0; s < 2; ++s)
+              triplets.emplace_back(static_cast<int>(2 * t.nodes[static_cast<std::size_t>(a)] + r),
+                                    static_cast<int>(2 * t.nodes[static_cast<std::size_t>(bb)] + s), k(2 * a + r, 2 * bb + s));
+    }
+  }
+  stiffness_.resize(static_cast<int>(2 * n), static_cast<int>(2 * n));
+  stiffness_.setFromTriplets(triplets.begin(), triplets.end());
+  f_ = load_vector();
+  timings_["assemble_s"] = seconds_since(start);
+
+  // essential conditions: eliminate the prescribed particle dofs
+  const auto solve_start = Clock::now();
+  std::vector<char> prescribed(static_cast<std::size_t>(2 * n), 0);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(2 * n);
+  for (const auto& d : problem_.prescribed) {
+    prescribed[static_cast<std::size_t>(2 * d.particle + d.component)] = 1;
+    u[2 * d.particle + d.component] = d.value;
+  }
+  std::vector<int> free_id(static_cast<std::size_t>(2 * n), -1);
+  int free_count = 0;
+  for (Index i = 0; i < 2 * n; ++i)
+    if (!prescribed[static_cast<std::size_t>(i)]) free_id[static_cast<std::size_t>(i)] = free_count++;
+  if (free_count > 0) {
+    Eigen::VectorXd rhs(free_count);
+    for (Index i = 0; i < 2 * n; ++i)
+      if (free_id[static_cast<std::size_t>(i)] >= 0) rhs[free_id[static_cast<std::size_t>(i)]] = f_[i];
+    std::vector<Eigen::Triplet<Real, int>> reduced;
+    reduced.reserve(static_cast<std::size_t>(stiffness_.nonZeros() / 2 + free_count));
+    for (int col = 0; col < stiffness_.outerSize(); ++col)
+      for (solve::SparseMatrix::InnerIterator it(stiffness_, col); it; ++it) {
+        const int fr = free_id[static_cast<std::size_t>(it.row())], fc = free_id[static_cast<std::size_t>(col)];
+        if (fr >= 0 && fc >= 0) {
+          if (fr <= fc) reduced.emplace_back(fr, fc, it.value());
+        } else if (fr >= 0) {
+          rhs[fr] -= it.value() * u[col];
+        }
+      }
+    solve::SparseMatrix k(free_count, free_count);
+    k.setFromTriplets(reduced.begin(), reduced.end());
+    if (!rhs.allFinite()) throw AnalysisError("mpfem: non-finite load vector; check the load expressions");
+    Eigen::VectorXd uf;
+    try {
+      // a free rigid-body motion leaves only round-off pivots: (min/max pivot)^2 ~ 1e-16 and below,
+      // while a well-posed particle model stays above ~ (h / L)^4 >> 1e-13
+      solve::SolverOptions solver;
+      solver.min_rcond = 1e-13;
+      solver.allow_fallback = false;
+      uf = solve::solve_symmetric(k, rhs, solver_report_, solver);
+    } catch (const AnalysisError& e) {
+      throw AnalysisError(std::string(e.what()) +
+                          " (mpfem: fix enough particle dofs (boundary: fix / displacement) to remove the rigid-body "
+                          "motions of every disconnected part, or raise mpfem.stabilization if it is very small)");
+    }
+    for (Index i = 0; i < 2 * n; ++i)
+      if (free_id[static_cast<std::size_t>(i)] >= 0) u[i] = uf[free_id[static_cast<std::size_t>(i)]];
+  }
+  if (!u.allFinite()) throw AnalysisError("mpfem: non-finite displacements; the system is singular");
+  u_ = u;
+  const Eigen::VectorXd ku = stiffness_ * u_;
+  reactions_ = ku - f_;
+  for (Index i = 0; i < 2 * n; ++i)
+    if (!prescribed[static_cast<std::size_t>(i)]) reactions_[i] = 0;
+  energy_internal_ = 0.5 * u_.dot(ku);
+  energy_external_ = 0.5 * (f_.dot(u_) + reactions_.dot(u_));
+  timings_["solve_s"] = seconds_since(solve_start);
+
+  // particle strains and stresses
+  strain_.resize(3, n);
+  stress_.resize(3, n);
+  out_of_plane_.resize(n);
+  if (cell_strain_) {
+#pragma omp parallel for schedule(static)
+    for (Index p = 0; p < n; ++p) {
+      const auto sp = static_cast<std::size_t>(p);
+      Eigen::Vector3d eps = Eigen::Vector3d::Zero();
+      for (const auto& [q, block] : cell_strain_ops_[sp]) eps += block * u_.segment<2>(2 * q);
+      const Vec2 offset = problem_.layout.positions.col(p) - cells_.centroid.col(p);
+      for (int a = 0; a < 2; ++a)
+        for (const auto& [q, block] : strain_gradient_[sp][static_cast<std::size_t>(a)])
+          eps += offset[a] * (block * u_.segment<2>(2 * q));
+      strain_.col(p) = eps;
+    }
+  } else if (problem_.options.element == ElementKind::five_node) {
+#pragma omp parallel for schedule(static)
+    for (Index p = 0; p < n; ++p) {
+      const ParticleElement& e = discretization_.elements[static_cast<std::size_t>(p)];
+      Eigen::Vector3d eps = Eigen::Vector3d::Zero();
+      for (int a = 0; a < kElementNodes; ++a) {
+        const Index j = e.nodes[static_cast<std::size_t>(a)];
+        if (j < 0) continue;
+        const Vec2 uj = u_.segment<2>(2 * j);
+        eps[0] += e.mean_gradient(0, a) * uj.x();
+        eps[1] += e.mean_gradient(1, a) * uj.y();
+        eps[2] += e.mean_gradient(1, a) * uj.x() + e.mean_gradient(0, a) * uj.y();
+      }
+      strain_.col(p) = eps;
+    }
+  } else {
+    strain_.setZero();
+    Eigen::VectorXd area = Eigen::VectorXd::Zero(n);
+    for (const auto& t : grid_triangles()) {
+      Eigen::Matrix<Real, 6, 1> ul;
+      for (int a = 0; a < 3; ++a) ul.segment<2>(2 * a) = u_.segment<2>(2 * t.nodes[static_cast<std::size_t>(a)]);
+      const Eigen::Vector3d eps = triangle_strain_operator(t.gradient) * ul;
+      for (Index p : t.nodes) strain_.col(p) += t.area * eps, area[p] += t.area;
+    }
+    for (Index p = 0; p < n; ++p) strain_.col(p) /= area[p];
+  }
+  for (Index p = 0; p < n; ++p) {
+    const PlaneMaterial& m = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(p)])];
+    stress_.col(p) = m.matrix() * strain_.col(p);
+    out_of_plane_[p] = m.out_of_plane(strain_.col(p));
+  }
+  if (!stress_.allFinite()) throw AnalysisError("mpfem: non-finite particle stresses");
+}
+
+void MpfemAnalysis::compute_errors() {
+  if (!problem_.options.exact_displacement) return;
+  const Points2& x = problem_.layout.positions;
+  const Index n = x.cols();
+  const geometry::Expression ux((*problem_.options.exact_displacement)[0]), uy((*problem_.options.exact_displacement)[1]);
+  const Real z = problem_.z_mid;
+  auto exact_u = [&](const Vec2& p) { return Vec2(ux.evaluate(Vec3(p.x(), p.y(), z)), uy.evaluate(Vec3(p.x(), p.y(), z))); };
+  const Real delta = 1e-4 * (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
+  auto exact_strain = [&](const Vec2& p) {
+    const Vec2 dx(delta, 0), dy(0, delta);
+    const Vec2 du_dx = (exact_u(p + dx) - exact_u(p - dx)) / (2 * delta);
+    const Vec2 du_dy = (exact_u(p + dy) - exact_u(p - dy)) / (2 * delta);
+    return Eigen::Vector3d(du_dx.x(), du_dy.y(), du_dy.x() + du_dx.y());
+  };
+  Real l2_error = 0, l2_norm = 0, energy_error = 0, energy_norm = 0;
+  for (const auto& t : error_triangles()) {
+    const Eigen::Matrix3d c = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(t.nodes[0])])].matrix();
+    Eigen::Matrix<Real, 6, 1> ul;
+    for (int a = 0; a < 3; ++a) ul.segment<2>(2 * a) = u_.segment<2>(2 * t.nodes[static_cast<std::size_t>(a)]);
+    const Eigen::Vector3d eps_h = triangle_strain_operator(t.gradient) * ul;
+    for (const auto& q : triangle_rule()) {
+      Vec2 p = Vec2::Zero(), uh = Vec2::Zero();
+      for (int a = 0; a < 3; ++a) {
+        p += q.bary[static_cast<std::size_t>(a)] * x.col(t.nodes[static_cast<std::size_t>(a)]);
+        uh += q.bary[static_cast<std::size_t>(a)] * ul.segment<2>(2 * a);
+      }
+      const Real w = q.weight * t.area * t.weight;
+      const Vec2 ue = exact_u(p);
+      const Eigen::Vector3d eps = exact_strain(p);
+      l2_error += w * (uh - ue).squaredNorm();
+      l2_norm += w * ue.squaredNorm();
+      energy_error += w * (eps_h - eps).dot(c * (eps_h - eps));
+      energy_norm += w * eps.dot(c * eps);
+    }
+  }
+  Real particle_error = 0, particle_norm = 0, max_u_error = 0, max_u = 0, max_s_error = 0, max_s = 0;
+  for (Index p = 0; p < n; ++p) {
+    const Eigen::Matrix3d c = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(p)])].matrix();
+    const Real dv = discretization_.area_weight[p];
+    const Eigen::Vector3d eps = exact_strain(x.col(p));
+    const Eigen::Vector3d e = strain_.col(p) - eps;
+    particle_error += dv * e.dot(c * e);
+    particle_norm += dv * eps.dot(c * eps);
+    const Vec2 ue = exact_u(x.col(p));
+    max_u_error = std::max(max_u_error, (u_.segment<2>(2 * p) - ue).norm());
+    max_u = std::max(max_u, ue.norm());
+    const Eigen::Vector3d se = c * eps;
+    max_s_error = std::max(max_s_error, (stress_.col(p) - se).norm());
+    max_s = std::max(max_s, se.norm());
+  }
+  auto ratio = [](Real a, Real b) { return b > 0 ? std::sqrt(a / b) : std::sqrt(a); };
+  errors_.l2 = ratio(l2_error, l2_norm);
+  errors_.energy = ratio(energy_error, energy_norm);
+  errors_.energy_particles = ratio(particle_error, particle_norm);
+  errors_.max_displacement = max_u > 0 ? max_u_error / max_u : max_u_error;
+  errors_.max_stress = max_s > 0 ? max_s_error / max_s : max_s_error;
+}
+
+void MpfemAnalysis::solve() {
+  const auto start = Clock::now();
+  assemble_and_solve();
+  compute_errors();
+  solved_ = true;
+  timings_["total_s"] = seconds_since(start) + timings_["setup_s"];
+}
+
+void MpfemAnalysis::run(OutputSink& sink) {
+  sink.progress(0.0, "assembling");
+  solve();
+  sink.progress(1.0, "solved");
+  sink.output_point(1, 1.0, 1.0);
+}
+
+Real MpfemAnalysis::total_volume() const { return problem_.thickness * discretization_.area_weight.sum(); }
+
+Index MpfemAnalysis::nearest_particle(const Vec2& x) const {
+  Index best = 0;
+  Real distance = INFINITY;
+  for (Index p = 0; p < problem_.layout.positions.cols(); ++p) {
+    const Real d = (problem_.layout.positions.col(p) - x).squaredNorm();
+    if (d < distance) distance = d, best = p;
+  }
+  return best;
+}
+
+Vec2 MpfemAnalysis::displacement_at(const Vec2& x) const {
+  const auto values = shape_functions_at(discretization_, problem_.layout.positions, x);
+  if (values.empty()) return u_.segment<2>(2 * nearest_particle(x));
+  Vec2 u = Vec2::Zero();
+  for (const auto& v : values) u += v.value * u_.segment<2>(2 * v.particle);
+  return u;
+}
+
+Vec2 MpfemAnalysis::reaction(const IndexList& particles) const {
+  Vec2 r = Vec2::Zero();
+  for (Index p : particles) r += reactions_.segment<2>(2 * p);
+  return r;
+}
+
+Real MpfemAnalysis::field_probe(const Probe& p) const {
+  auto vector_component = [&](const Vec2& v) {
+    if (p.component == "magnitude") return v.norm();
+    const int c = kVector.at(p.component);
+    return c < 2 ? v[c] : 0.0;
+  };
+  auto tensor_component = [&](Index particle) {
+    const PlaneMaterial& m = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(particle)])];
+    const bool stress = p.field == "stress";
+    material::Voigt v;
+    if (stress) v = to_voigt(stress_.col(particle), m.plane == PlaneKind::strain ? out_of_plane_[particle] : 0.0);
+    else v = to_voigt(strain_.col(particle), m.plane == PlaneKind::stress ? out_of_plane_[particle] : 0.0);
+    if (p.component == "von_mises") return material::von_mises(v);
+    return v[kTensor.at(p.component)];
+  };
+  if (p.field == "reaction_force") {
+    const Vec2 r = reaction(p.nodes);
+    return vector_component(r);
+  }
+  auto value_at_particle = [&](Index q) {
+    return p.field == "displacement" ? vector_component(u_.segment<2>(2 * q)) : tensor_component(q);
+  };
+  if (p.at) {
+    const Vec2 x(p.at->x(), p.at->y());
+    if (p.nearest_in_set && !p.nodes.empty()) {
+      Index best = p.nodes.front();
+      for (Index q : p.nodes)
+        if ((problem_.layout.positions.col(q) - x).squaredNorm() < (problem_.layout.positions.col(best) - x).squaredNorm()) best = q;
+      return value_at_particle(best);
+    }
+    if (p.field == "displacement") return vector_component(displacement_at(x));
+    return value_at_particle(nearest_particle(x));
+  }
+  Real best = 0;
+  for (Index q : p.nodes) {
+    const Real v = value_at_particle(q);
+    if (std::abs(v) > std::abs(best)) best = v;
+  }
+  return best;
+}
+
+Real MpfemAnalysis::probe(const Probe& requested) const {
+  if (!solved_) return NAN;
+  // the application may hold the probes resolved on the case's original particles; the ones given
+  // to the constructor are resolved on this analysis' particles (refine / hole regenerate them)
+  const Probe* own = &requested;
+  for (const auto& q : probes_)
+    if (q.name == requested.name) own = &q;
+  const Probe& p = *own;
+  if (p.field == "energy") {
+    if (p.component == "kinetic") return 0.0;
+    if (p.component == "external") return energy_external_;
+    return energy_internal_;
+  }
+  return field_probe(p);
+}
+
+std::map<std::string, Real> MpfemAnalysis::builtin_probes() const {
+  std::map<std::string, Real> result;
+  result["h"] = discretization_.typical_spacing;
+  if (problem_.options.exact_displacement) {
+    result["err_displacement"] = errors_.max_displacement;
+    result["err_stress"] = errors_.max_stress;
+    result["err_l2"] = errors_.l2;
+    result["err_energy"] = errors_.energy;
+    result["err_energy_particles"] = errors_.energy_particles;
+  }
+  return result;
+}
+
+OutputFrame MpfemAnalysis::frame() const {
+  const Points2& x = problem_.layout.positions;
+  const Index n = x.cols();
+  OutputFrame f;
+  f.points.resize(3, n);
+  f.points.topRows(2) = x;
+  f.points.row(2).setConstant(problem_.z_mid);
+  PointField displacement{"displacement", 3, std::vector<Real>(static_cast<std::size_t>(3 * n), 0.0)};
+  PointField strain{"strain", 6, std::vector<Real>(static_cast<std::size_t>(6 * n), 0.0)};
+  PointField stress{"stress", 6, std::vector<Real>(static_cast<std::size_t>(6 * n), 0.0)};
+  PointField mises{"von_mises", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
+  PointField volume{"particle_volume", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
+  PointField material_id{"material_id", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
+  for (Index p = 0; p < n; ++p) {
+    const auto s = static_cast<std::size_t>(p);
+    volume.values[s] = problem_.thickness * discretization_.area_weight[p];
+    material_id.values[s] = problem_.material_of_particle[s];
+    if (!solved_) continue;
+    displacement.values[3 * s] = u_[2 * p];
+    displacement.values[3 * s + 1] = u_[2 * p + 1];
+    const PlaneMaterial& m = materials_[static_cast<std::size_t>(problem_.material_of_particle[s])];
+    const material::Voigt e = to_voigt(strain_.col(p), m.plane == PlaneKind::stress ? out_of_plane_[p] : 0.0);
+    const material::Voigt sg = to_voigt(stress_.col(p), m.plane == PlaneKind::strain ? out_of_plane_[p] : 0.0);
+    for (int c = 0; c < 6; ++c) strain.values[6 * s + c] = e[c], stress.values[6 * s + c] = sg[c];
+    mises.values[s] = material::von_mises(sg);
+  }
+  f.point_fields = {displacement, strain, stress, mises, volume, material_id};
+  return f;
+}
+
+RunCounts MpfemAnalysis::counts() const {
+  RunCounts c;
+  c.nodes = problem_.layout.positions.cols();
+  c.dofs = 2 * c.nodes;
+  c.steps = 1;
+  return c;
+}
+
+}  // namespace lamina::mpfem

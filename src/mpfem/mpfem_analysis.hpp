@@ -1,0 +1,121 @@
+#pragma once
+// `method: mpfem` — moving particle finite element method for 2D linear elastostatics (seed 001):
+// five-node particle elements, particle quadrature of eqs (4)-(6), essential conditions on particle dofs, CHOLMOD.
+//
+// Stiffness with particle_strain: cell (default on grid particle sets; tributary_cells.hpp):
+//   K = sum_I t [ |Omega_I| B_I^T C B_I + sum_ab M_ab,I G_a,I^T C G_b,I
+//                 + beta |Omega_I| / A_I sum_{T in E_I} A_T (B_T - B_I)^T C (B_T - B_I) ]
+//   B_I: cell-mean strain; G_a,I = sum_{J in E_I} dN_J/dx_a B_J: the strain gradient from the
+//   five-node element built on the cell centroids; M_I: second moments of Omega_I about its
+//   centroid. The M term restores the energy of the strain variation inside a cell that
+//   one-point particle quadrature loses; G vanishes for linear fields (patch test kept).
+//   Particle strain reported: B_I u + G_I u (x_I - c_I) (the cell mean moved to the particle).
+// Stiffness with particle_strain: star (seed eq 4, stabilised; docs/mpfem.md)
+//   K = sum_I dV_I [ B_I^T C B_I + beta (1/A_I) sum_{T in E_I} A_T (B_T - B_I)^T C (B_T - B_I) ]
+//   B_I: the mean strain operator of particle I's five-node element, B_T: that of one of its
+//   triangles. The second term vanishes for every linear field (B_T u = B_I u), so it does not
+//   disturb the patch test; it removes the zero-energy (odd-even) modes of pure particle
+//   quadrature. beta = mpfem.stabilization (0 < beta <= 1).
+//   Body force (eq 5): f_I = b(x_I) dV_I. Tractions (eq 6): f_I = t(x_I) dS_I (particle) or the
+//   2-point Gauss rule on each boundary segment (gauss, default).
+//   Point forces: the total shared equally by the selected particles (Kronecker delta).
+// Essential conditions: prescribed particle dofs are eliminated (K_ff u_f = f_f - K_fp u_p).
+// Results: particle displacements u_I; particle strain B_I u, stress C B_I u (plane stress:
+//   szz = 0, ezz from nu; plane strain: ezz = 0, szz = nu (sxx + syy)); reactions K u - f at the
+//   prescribed dofs. With element t3: strains/stresses at particles are the area-weighted means of
+//   the adjacent triangles.
+// Probes: displacement at `at`: the blended interpolant (nearest particle outside the body);
+//   strain/stress: the nearest particle's value; reaction_force: sum over the selected particles;
+//   energy: internal 1/2 u.K u, external (Clapeyron) 1/2 (f.u + R.u_prescribed), total = internal.
+//   Builtin probes: h (sqrt(area / N)); with exact_displacement: err_displacement, err_stress
+//   (max particle error / max exact), err_l2 (relative L2 displacement error over the element
+//   triangles), err_energy (relative energy-norm error of the element interpolants),
+//   err_energy_particles (same with the particle strains and the particle quadrature).
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/analysis.hpp"
+#include "mpfem/mpfem_problem.hpp"
+#include "mpfem/particle_elements.hpp"
+#include "mpfem/tributary_cells.hpp"
+#include "solve/sparse_linear_solver.hpp"
+
+namespace lamina::mpfem {
+
+class MpfemAnalysis : public Analysis {
+ public:
+  /// Builds the particle elements (InputError for degenerate particle sets) and checks probes.
+  MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes);
+
+  std::string method() const override { return "mpfem"; }
+  void run(OutputSink& sink) override;
+  Real probe(const Probe& probe) const override;
+  std::map<std::string, Real> builtin_probes() const override;
+  OutputFrame frame() const override;
+  RunCounts counts() const override;
+  std::map<std::string, Real> timings() const override { return timings_; }
+
+  /// Assemble and solve without an output sink (tests).
+  void solve();
+  /// Re-discretise: rebuild the five-node elements and weights from new particle positions.
+  void rebuild(const Points2& positions);
+
+  const ParticleDiscretization& discretization() const { return discretization_; }
+  const Points2& positions() const { return problem_.layout.positions; }
+  Vec2 displacement(Index particle) const { return u_.segment<2>(2 * particle); }
+  Eigen::Vector3d particle_stress(Index particle) const { return stress_.col(particle); }  // sxx syy sxy
+  Eigen::Vector3d particle_strain(Index particle) const { return strain_.col(particle); }  // exx eyy gxy
+  Vec2 displacement_at(const Vec2& x) const;
+  Vec2 reaction(const IndexList& particles) const;
+  Real internal_energy() const { return energy_internal_; }
+  Real total_volume() const;
+  const solve::SolverReport& solver_report() const { return solver_report_; }
+  /// Assembled stiffness (full storage, 2N x 2N, after solve).
+  const solve::SparseMatrix& stiffness() const { return stiffness_; }
+  /// Relative errors against options.exact_displacement (-1 if none).
+  struct Errors {
+    Real l2 = -1, energy = -1, energy_particles = -1, max_displacement = -1, max_stress = -1;
+  };
+  const Errors& errors() const { return errors_; }
+
+ private:
+  void assemble_and_solve();
+  void build_cell_operators();
+  /// Sparse 3 x 2N strain operator: (particle, 3 x 2 block) pairs.
+  using StrainBlocks = std::vector<std::pair<Index, Eigen::Matrix<Real, 3, 2>>>;
+  void assemble_cell_stiffness(std::vector<Eigen::Triplet<Real, int>>& triplets) const;
+  void compute_errors();
+  Eigen::VectorXd load_vector() const;
+  Index nearest_particle(const Vec2& x) const;
+  Real field_probe(const Probe& probe) const;
+
+  struct Triangle {  // for error integration and the t3 reference element
+    std::array<Index, 3> nodes;
+    Real area;
+    Eigen::Matrix<Real, 2, 3> gradient;
+    Real weight;  // 1 / covering
+  };
+  std::vector<Triangle> error_triangles() const;
+  std::vector<Triangle> grid_triangles() const;
+
+  MpfemProblem problem_;
+  std::vector<Probe> probes_;
+  ParticleDiscretization discretization_;
+  bool cell_strain_ = false;
+  TributaryCells cells_;
+  std::vector<StrainBlocks> cell_strain_ops_;                // B_I (cell mean)
+  std::vector<std::array<StrainBlocks, 2>> strain_gradient_;  // G_x,I and G_y,I
+  std::vector<PlaneMaterial> materials_;
+  solve::SparseMatrix stiffness_;  // full (both triangles), 2N x 2N
+  Eigen::VectorXd f_, u_, reactions_;
+  Eigen::Matrix3Xd strain_, stress_;
+  Eigen::VectorXd out_of_plane_;
+  Real energy_internal_ = 0, energy_external_ = 0;
+  Errors errors_;
+  solve::SolverReport solver_report_;
+  std::map<std::string, Real> timings_;
+  bool solved_ = false;
+};
+
+}  // namespace lamina::mpfem

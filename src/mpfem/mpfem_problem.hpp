@@ -1,0 +1,77 @@
+#pragma once
+// The MPFEM family's description of a 2D linear elastostatic problem (seed 001 eqs 1a-c, 2):
+// particles in the x-y plane, thickness, materials, essential dofs, loads and options (no io types).
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/expression.hpp"
+#include "material/linear_elastic.hpp"
+#include "mpfem/particle_elements.hpp"
+
+namespace lamina::mpfem {
+
+enum class PlaneKind { stress, strain };
+
+/// stress | five_node: the MPFEM particle elements; t3: reference linear triangles on the
+/// same (grid) particles, one diagonal per grid cell, one-point Gauss (for comparisons).
+enum class ElementKind { five_node, t3 };
+
+/// Boundary traction quadrature: particle = seed eq (6), f_I = t(x_I) dS_I;
+/// gauss = 2-point Gauss on every boundary segment with the segment's linear trace of phi.
+enum class TractionQuadrature { gauss, particle };
+
+/// The particle strain operator of the quadrature (seed eq 4):
+///   cell: mean over the particle's tributary cell (tributary_cells.hpp) plus the strain-gradient
+///     (second-moment) term; grid particle sets only. Default.
+///   star: mean gradient of the particle's own five-node element, dV_I = A_I / 2.
+enum class ParticleStrain { cell, star };
+
+struct MpfemOptions {
+  PlaneKind plane = PlaneKind::stress;
+  ElementKind element = ElementKind::five_node;
+  ElementOptions elements;
+  ParticleStrain particle_strain = ParticleStrain::cell;
+  Real stabilization = 0.1;     // beta of the element-deviation stabilisation (docs/mpfem.md)
+  TractionQuadrature traction_quadrature = TractionQuadrature::gauss;
+  std::optional<std::array<std::string, 2>> exact_displacement;  // ux, uy of x y: error probes
+};
+
+/// Plane elasticity matrix (3 x 3, engineering shear) and the out-of-plane response.
+struct PlaneMaterial {
+  material::LinearElastic elastic;
+  PlaneKind plane = PlaneKind::stress;
+  Eigen::Matrix3d matrix() const;
+  /// eps_zz (plane stress) or sigma_zz (plane strain) from the in-plane strain.
+  Real out_of_plane(const Eigen::Vector3d& strain) const;
+};
+
+struct PrescribedDof {
+  Index particle = 0;
+  int component = 0;  // 0 = x, 1 = y
+  Real value = 0;
+};
+
+struct MpfemLoad {
+  enum class Kind { force, traction, pressure, body_force };
+  Kind kind = Kind::force;
+  IndexList particles;                          // selected particles
+  std::array<geometry::ScalarField, 2> vector;  // force (total), traction (per area), body force (per volume)
+  geometry::ScalarField scalar;                 // pressure (per area, positive pushes inwards)
+  std::string label;                            // for messages, e.g. "loads.0"
+};
+
+struct MpfemProblem {
+  ParticleLayout layout;
+  Real thickness = 1.0;
+  Real z_mid = 0.5;                             // z of the particles in outputs
+  std::vector<material::LinearElastic> materials;
+  std::vector<int> material_of_particle;        // index into materials, per particle
+  std::vector<PrescribedDof> prescribed;        // essential conditions on particle dofs
+  std::vector<MpfemLoad> loads;
+  MpfemOptions options;
+};
+
+}  // namespace lamina::mpfem
