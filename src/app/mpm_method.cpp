@@ -1,0 +1,223 @@
+#include "app/mpm_method.hpp"
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+#include "mpm/mpm_analysis.hpp"
+
+namespace lamina::app {
+
+namespace {
+
+struct MomentEntry {
+  io::Selection select;
+  std::array<geometry::ScalarField, 3> moment;
+  mpm::LoadRamp ramp;
+  io::SourceLocation location;
+};
+
+struct MpmMethodOptions : MethodOptions {
+  mpm::MpmOptions options;
+  shell::ShellSection section;
+  std::vector<MomentEntry> moments;
+};
+
+mpm::LoadRamp convert_ramp(const io::Ramp& r, Real scale) {
+  mpm::LoadRamp out;
+  out.kind = r.kind == io::Ramp::Kind::linear ? mpm::LoadRamp::Kind::linear
+             : r.kind == io::Ramp::Kind::step ? mpm::LoadRamp::Kind::step
+                                              : mpm::LoadRamp::Kind::table;
+  for (const auto& row : r.table) out.table.push_back({row[0] / scale, row[1]});
+  return out;
+}
+
+mpm::LoadRamp read_ramp(const io::NodeReader& node) {
+  mpm::LoadRamp ramp;
+  if (!node.defined()) return ramp;
+  if (node.is_scalar()) {
+    if (auto w = node.as_word({"linear", "step"})) ramp.kind = *w == "step" ? mpm::LoadRamp::Kind::step : mpm::LoadRamp::Kind::linear;
+    return ramp;
+  }
+  ramp.kind = mpm::LoadRamp::Kind::table;
+  for (const auto& row : node.elements())
+    if (auto v = row.as_reals(2)) ramp.table.push_back({(*v)[0], (*v)[1]});
+  if (ramp.table.empty()) node.error("linear, step or a table [[s0, f0], [s1, f1], ...]");
+  return ramp;
+}
+
+void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, shell::ShellSection& s) {
+  io::NodeReader section(c.resolved["shell"], "shell", &mpm_section.sink());
+  if (!section.defined() || !section.expect_map()) return;
+  s.thickness_points = static_cast<int>(section.integer("thickness_points", 3, 1, 7));
+  s.hourglass = section.real("hourglass", 0.1, 0.0, 1.0);
+  s.shear_factor = section.real("shear_factor", 5.0 / 6.0, 0.0, 1.0, true);
+  s.warping_correction = section.boolean("warping_correction", true);
+  section.reject_unknown_keys();
+}
+
+std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader& section) {
+  auto result = std::make_unique<MpmMethodOptions>();
+  mpm::MpmOptions& o = result->options;
+  read_shell_section(c, section, result->section);
+  bool kinetic_default = true;
+  if (section.defined() && section.expect_map()) {
+    const std::string analysis = section.word("analysis", {"quasi_static", "dynamic"}, "quasi_static");
+    o.analysis = analysis == "dynamic" ? mpm::MpmOptions::Kind::dynamic : mpm::MpmOptions::Kind::quasi_static;
+    kinetic_default = o.analysis == mpm::MpmOptions::Kind::quasi_static;
+    o.load_levels = static_cast<int>(section.integer("load_levels", 10, 1, 100000));
+    o.tolerance = section.real("tolerance", 1e-4, 0.0, 1.0, true, true);
+    o.max_steps_per_level = section.integer("max_steps_per_level", 2000000, 1, 1000000000000LL);
+    o.end_time = section.real("end_time", 1.0, 0.0, INFINITY, true);
+    o.output_points = static_cast<int>(section.integer("output_points", 10, 1, 1000000));
+    o.max_steps = section.integer("max_steps", 50000000, 1, 1000000000000LL);
+    o.flip = section.real("flip", 0.0, 0.0, 1.0);
+    io::NodeReader ts = section.child("time_step");
+    if (ts.defined() && ts.expect_map()) {
+      o.alpha = ts.real("alpha", 0.5, 0.0, 1.0, true, true);
+      o.shell_safety = ts.real("shell_safety", 0.9, 0.0, 1.0, true);
+      if (ts.has("fixed")) o.fixed_time_step = ts.real("fixed", std::nullopt, 0.0, INFINITY, true);
+      ts.reject_unknown_keys();
+    }
+    o.kinetic_damping = kinetic_default;
+    io::NodeReader damping = section.child("damping");
+    if (damping.defined() && damping.expect_map()) {
+      o.mass_damping = damping.real("mass", 0.0, 0.0);
+      o.kinetic_damping = damping.boolean("kinetic", kinetic_default);
+      damping.reject_unknown_keys();
+    }
+    io::NodeReader moments = section.child("moments");
+    if (moments.defined() && moments.expect_sequence()) {
+      for (const auto& m : moments.elements()) {
+        if (!m.expect_map()) continue;
+        MomentEntry entry;
+        entry.location = io::location_of(m);
+        if (auto s = io::read_selection(m.required("select"))) entry.select = *s;
+        io::NodeReader vector = m.required("moment");
+        if (vector.defined()) {
+          if (vector.is_sequence() && vector.node().size() == 3) {
+            const auto items = vector.elements();
+            for (std::size_t a = 0; a < 3; ++a) entry.moment[a] = io::read_scalar_field(items[a]);
+          } else {
+            vector.error("three components [mx, my, mz]");
+          }
+        }
+        entry.ramp = read_ramp(m.child("ramp"));
+        m.reject_unknown_keys();
+        result->moments.push_back(entry);
+      }
+    }
+    section.reject_unknown_keys();
+  }
+  return result;
+}
+
+std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, const MethodOptions& options) {
+  const auto& mo = static_cast<const MpmMethodOptions&>(options);
+  mpm::MpmProblem p;
+  std::vector<Diagnostic> problems;
+  auto problem_at = [&](const io::SourceLocation& where, const std::string& key, const std::string& expected,
+                        const std::string& found) {
+    problems.push_back(Diagnostic{where.file.empty() ? c.file : where.file, where.line, where.column, where.key_path + key, expected, found});
+  };
+  if (!model.shell) throw InputError(Diagnostic{c.file, c.discretization_location.line, 0, "discretization.elements",
+                                                "shell elements [n1, n2] of the generated mid-surface", "nothing"});
+  p.mesh = *model.shell;
+  p.options = mo.options;
+  p.section = mo.section;
+  if (c.discretization.grid_cell) p.options.grid_cell = *c.discretization.grid_cell;
+  const Real ramp_scale = p.options.analysis == mpm::MpmOptions::Kind::quasi_static ? 1.0 : p.options.end_time;
+
+  if (c.materials.size() != 1) {
+    problem_at(io::SourceLocation{c.file, 0, 0, "materials"}, "", "exactly one material (mpm shells are homogeneous in this build)",
+               fmt::format("{} materials", c.materials.size()));
+  } else {
+    const auto& m = c.materials[0].spec;
+    io::SourceLocation where{c.file, 0, 0, "materials.0"};
+    if (m.model != material::MaterialModel::linear_elastic)
+      problem_at(where, ".model", "linear_elastic (corotational; neo_hookean and j2_plasticity are not in this build yet)",
+                 "another model");
+    if (!m.density || !(*m.density > 0)) problem_at(where, ".density", "a positive density (mpm is an explicit dynamic method)", "none");
+    p.young = m.E;
+    p.poisson = m.nu;
+    p.density = m.density.value_or(0.0);
+  }
+  for (std::size_t i = 0; i < c.boundary.size(); ++i) {
+    const auto& b = c.boundary[i];
+    mpm::NodalConstraint k;
+    k.nodes = model.boundary_nodes[i];
+    k.fixed = b.fixed;
+    k.velocity = b.velocity;
+    k.ramp = convert_ramp(b.ramp, ramp_scale);
+    k.label = fmt::format("boundary.{}", i);
+    bool displacement = false;
+    for (int a = 0; a < 3; ++a) {
+      if (!b.displacement[static_cast<std::size_t>(a)]) continue;
+      // a zero prescribed displacement is a fixed component; other values are not supported yet
+      const auto& d = *b.displacement[static_cast<std::size_t>(a)];
+      if (d.is_constant() && d.constant == 0.0) k.fixed[static_cast<std::size_t>(a)] = true;
+      else displacement = true;
+    }
+    if (displacement)
+      problem_at(b.location, ".displacement", "fix or velocity (non-zero prescribed displacements are not in mpm yet)", "displacement");
+    p.constraints.push_back(k);
+  }
+  for (std::size_t i = 0; i < c.loads.size(); ++i) {
+    const auto& l = c.loads[i];
+    mpm::NodalLoad load;
+    load.nodes = model.load_nodes[i];
+    load.vector = l.vector;
+    load.scalar = l.scalar;
+    load.ramp = convert_ramp(l.ramp, ramp_scale);
+    load.label = fmt::format("loads.{}", i);
+    switch (l.kind) {
+      case io::Load::Kind::force: load.kind = mpm::NodalLoad::Kind::force; break;
+      case io::Load::Kind::traction: load.kind = mpm::NodalLoad::Kind::traction; break;
+      case io::Load::Kind::pressure: load.kind = mpm::NodalLoad::Kind::pressure; break;
+      case io::Load::Kind::body_force: load.kind = mpm::NodalLoad::Kind::body_force; break;
+      case io::Load::Kind::mass:
+        load.kind = mpm::NodalLoad::Kind::mass;
+        if (!l.scalar.is_constant() || !(l.scalar.constant > 0)) problem_at(l.location, ".mass", "a positive constant mass", "an expression or <= 0");
+        break;
+      case io::Load::Kind::initial_velocity: load.kind = mpm::NodalLoad::Kind::initial_velocity; break;
+    }
+    p.loads.push_back(load);
+  }
+  for (std::size_t i = 0; i < mo.moments.size(); ++i) {
+    const auto& m = mo.moments[i];
+    mpm::NodalLoad load;
+    load.kind = mpm::NodalLoad::Kind::moment;
+    try {
+      load.nodes = resolve_or_throw(m.select, model.cloud);
+    } catch (const InputError& e) {
+      problems.insert(problems.end(), e.diagnostics().begin(), e.diagnostics().end());
+      continue;
+    }
+    load.vector = m.moment;
+    load.ramp = m.ramp;
+    load.label = fmt::format("mpm.moments.{}", i);
+    p.loads.push_back(load);
+  }
+  if (!problems.empty()) throw InputError(problems);
+  try {
+    return std::make_unique<mpm::MpmAnalysis>(std::move(p), model.probes);
+  } catch (const InputError& e) {
+    std::vector<Diagnostic> located = e.diagnostics();
+    for (auto& d : located) {
+      if (!d.file.empty()) continue;
+      d.file = c.file;
+      if (d.key_path.rfind("discretization", 0) == 0) d.line = c.discretization_location.line, d.column = c.discretization_location.column;
+      else if (d.key_path.rfind("geometry", 0) == 0) d.line = c.geometry_location.line, d.column = c.geometry_location.column;
+    }
+    throw InputError(located);
+  }
+}
+
+}  // namespace
+
+MethodEntry mpm_method_entry() {
+  return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true},
+                     "CPDI2 material point method with Belytschko-Tsay shell domains, explicit / quasi-static (seed 000)",
+                     read_mpm, create_mpm};
+}
+
+}  // namespace lamina::app

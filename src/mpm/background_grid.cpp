@@ -1,0 +1,113 @@
+#include "mpm/background_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/error.hpp"
+
+namespace lamina::mpm {
+
+namespace {
+
+constexpr std::int64_t kOffset = std::int64_t(1) << 20;
+constexpr std::int64_t kMask = (std::int64_t(1) << 21) - 1;
+
+std::int64_t pack(std::int64_t i, std::int64_t j, std::int64_t k) {
+  return ((i + kOffset) & kMask) | (((j + kOffset) & kMask) << 21) | (((k + kOffset) & kMask) << 42);
+}
+
+}  // namespace
+
+BackgroundGrid::BackgroundGrid(const Vec3& origin, Real cell) : origin_(origin), cell_(cell) {}
+
+Vec3 BackgroundGrid::node_position(Index slot) const {
+  const std::int64_t key = slot_key_[static_cast<std::size_t>(slot)];
+  const std::int64_t i = (key & kMask) - kOffset, j = ((key >> 21) & kMask) - kOffset, k = ((key >> 42) & kMask) - kOffset;
+  return origin_ + cell_ * Vec3(static_cast<Real>(i), static_cast<Real>(j), static_cast<Real>(k));
+}
+
+bool BackgroundGrid::locate(const PointMatrix& x) {
+  const Index n = x.cols();
+  const std::size_t entries = static_cast<std::size_t>(n) * kNodesPerCorner;
+  const bool resized = cell_of_corner_.size() != static_cast<std::size_t>(n);
+  if (resized) {
+    cell_of_corner_.assign(static_cast<std::size_t>(n), -1);
+    weight_.assign(entries, 0.0);
+    key_of_entry_.assign(entries, 0);
+  }
+  int changed = resized ? 1 : 0;
+  const Real inv = 1.0 / cell_;
+  bool finite = true;
+#pragma omp parallel for schedule(static) reduction(| : changed) reduction(&& : finite) if (n > 1024)
+  for (Index c = 0; c < n; ++c) {
+    const Vec3 s = (x.col(c) - origin_) * inv;
+    if (!s.allFinite() || s.cwiseAbs().maxCoeff() > static_cast<Real>(kOffset - 2)) {
+      finite = false;
+      continue;
+    }
+    const std::int64_t i = static_cast<std::int64_t>(std::floor(s.x())), j = static_cast<std::int64_t>(std::floor(s.y())),
+                       k = static_cast<std::int64_t>(std::floor(s.z()));
+    const Real fx = s.x() - static_cast<Real>(i), fy = s.y() - static_cast<Real>(j), fz = s.z() - static_cast<Real>(k);
+    const std::int64_t key = pack(i, j, k);
+    if (key != cell_of_corner_[static_cast<std::size_t>(c)]) {
+      cell_of_corner_[static_cast<std::size_t>(c)] = key;
+      changed = 1;
+      for (int a = 0; a < kNodesPerCorner; ++a)
+        key_of_entry_[static_cast<std::size_t>(c * kNodesPerCorner + a)] = pack(i + (a & 1), j + ((a >> 1) & 1), k + ((a >> 2) & 1));
+    }
+    for (int a = 0; a < kNodesPerCorner; ++a) {
+      const Real wx = (a & 1) ? fx : 1.0 - fx, wy = ((a >> 1) & 1) ? fy : 1.0 - fy, wz = ((a >> 2) & 1) ? fz : 1.0 - fz;
+      weight_[static_cast<std::size_t>(c * kNodesPerCorner + a)] = wx * wy * wz;
+    }
+  }
+  if (!finite) throw AnalysisError("a shell node left the background grid's range (non-finite or runaway position)");
+  if (!changed) return false;
+  sorted_entries_.resize(entries);
+  std::iota(sorted_entries_.begin(), sorted_entries_.end(), Index(0));
+  std::sort(sorted_entries_.begin(), sorted_entries_.end(), [&](Index a, Index b) {
+    const auto ka = key_of_entry_[static_cast<std::size_t>(a)], kb = key_of_entry_[static_cast<std::size_t>(b)];
+    return ka != kb ? ka < kb : a < b;
+  });
+  slot_of_entry_.assign(entries, 0);
+  slot_begin_.clear();
+  slot_key_.clear();
+  for (std::size_t s = 0; s < entries; ++s) {
+    const Index entry = sorted_entries_[s];
+    const auto key = key_of_entry_[static_cast<std::size_t>(entry)];
+    if (slot_key_.empty() || slot_key_.back() != key) {
+      slot_key_.push_back(key);
+      slot_begin_.push_back(static_cast<Index>(s));
+    }
+    slot_of_entry_[static_cast<std::size_t>(entry)] = static_cast<Index>(slot_key_.size()) - 1;
+  }
+  slot_begin_.push_back(static_cast<Index>(entries));
+  return true;
+}
+
+void BackgroundGrid::scatter(const PointMatrix& q, const Eigen::Matrix3Xd& mask, Eigen::Matrix3Xd& grid) const {
+  const Index slots = active_nodes();
+  grid.resize(3, slots);
+#pragma omp parallel for schedule(static) if (slots > 4096)
+  for (Index s = 0; s < slots; ++s) {
+    Vec3 sum = Vec3::Zero();
+    for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
+      const Index c = *e / kNodesPerCorner;
+      sum += weight_[static_cast<std::size_t>(*e)] * q.col(c).cwiseProduct(mask.col(c));
+    }
+    grid.col(s) = sum;
+  }
+}
+
+void BackgroundGrid::gather(const Eigen::Matrix3Xd& grid, PointMatrix& q) const {
+  const Index n = static_cast<Index>(cell_of_corner_.size());
+  q.resize(3, n);
+#pragma omp parallel for schedule(static) if (n > 1024)
+  for (Index c = 0; c < n; ++c) {
+    Vec3 sum = Vec3::Zero();
+    for (int a = 0; a < kNodesPerCorner; ++a) sum += weight(c, a) * grid.col(slot(c, a));
+    q.col(c) = sum;
+  }
+}
+
+}  // namespace lamina::mpm

@@ -1,0 +1,57 @@
+#pragma once
+// Sparse uniform background grid with trilinear shape functions S_I(x) for the two-step CPDI2
+// mapping (domain corners -> grid nodes), seed 000 eqs (1)-(9): only grid nodes touched by a corner exist.
+//
+// Storage: every corner c touches the 8 nodes of its cell; the (grid key, corner) pairs are sorted by
+// key once per connectivity change, which gives each active grid node a slot and a contiguous list of
+// the corners it receives from. P2G is then a gather per slot and G2P a gather per corner: no atomics,
+// results independent of the thread count. The connectivity is rebuilt only when a corner changes cell.
+#include <cstdint>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace lamina::mpm {
+
+class BackgroundGrid {
+ public:
+  static constexpr int kNodesPerCorner = 8;
+
+  /// origin: a grid node; cell: the uniform cell size (> 0).
+  BackgroundGrid(const Vec3& origin, Real cell);
+
+  Real cell() const { return cell_; }
+  const Vec3& origin() const { return origin_; }
+
+  /// Locate the corners x (3 x N): weights always, connectivity when a corner changed cell.
+  /// Returns true when the active node set was rebuilt.
+  bool locate(const PointMatrix& x);
+
+  Index active_nodes() const { return static_cast<Index>(slot_begin_.size()) - 1; }
+  /// Weight S_I(x_c) of the k-th grid node of corner c (k < 8) and that node's slot.
+  Real weight(Index corner, int k) const { return weight_[static_cast<std::size_t>(corner * kNodesPerCorner + k)]; }
+  Index slot(Index corner, int k) const { return slot_of_entry_[static_cast<std::size_t>(corner * kNodesPerCorner + k)]; }
+  /// Entries (corner * 8 + k) that scatter to one slot, in a fixed order.
+  const Index* slot_entries_begin(Index slot) const { return sorted_entries_.data() + slot_begin_[static_cast<std::size_t>(slot)]; }
+  const Index* slot_entries_end(Index slot) const { return sorted_entries_.data() + slot_begin_[static_cast<std::size_t>(slot + 1)]; }
+  /// Position of an active grid node.
+  Vec3 node_position(Index slot) const;
+
+  /// P2G: grid value g_I = sum_c S_I(x_c) q_c for a 3 x N corner array (mask: per component, 0 or 1).
+  void scatter(const PointMatrix& q, const Eigen::Matrix3Xd& mask, Eigen::Matrix3Xd& grid) const;
+  /// G2P: corner value q_c = sum_I S_I(x_c) g_I.
+  void gather(const Eigen::Matrix3Xd& grid, PointMatrix& q) const;
+
+ private:
+  Vec3 origin_;
+  Real cell_;
+  std::vector<std::int64_t> cell_of_corner_;  // packed cell key of each corner
+  std::vector<Real> weight_;                  // 8 per corner
+  std::vector<std::int64_t> key_of_entry_;
+  std::vector<Index> slot_of_entry_;
+  std::vector<Index> sorted_entries_;
+  std::vector<Index> slot_begin_{0};
+  std::vector<std::int64_t> slot_key_;
+};
+
+}  // namespace lamina::mpm

@@ -1,0 +1,121 @@
+#pragma once
+// Explicit CPDI2 material point method with Belytschko-Tsay shell domains (seed 000): the analysis
+// driver — explicit step eqs (1)-(14), adaptive time step eqs (38)-(40), quasi-static load levels.
+//
+// One explicit step, as an ordered list of stages (x^n, velocities at n-1/2):
+//  1. element stage: every BT domain updates its stresses with the node velocities that moved it
+//     to x^n and returns nodal forces/moments (eqs (17)-(37)); nodes gather them (no atomics).
+//  2. time step: dt = min(shell_safety * min_e L_e / c, alpha * cell / (c_dil + max |v_i|)) (eqs (38)-(40)).
+//  3. external loads at the load factor / time; damping forces; the residual.
+//  4. P2G (eqs (1)-(4)): grid mass, momentum and force m_I = sum_c S_I(x_c) m_c, ... (each free
+//     component separately, so a fixed component of a node adds nothing to the grid).
+//  5. grid update (eqs (5)-(7)): v_I = (p_I + dt f_I) / m_I; grid nodes without free mass stay at rest.
+//  6. G2P (eq (8)): v_c = sum_I S_I(x_c) v_I (PIC) blended with the FLIP update v_c + dt sum_I S_I a_I
+//     (options.flip; default 0 = PIC); prescribed components imposed at the nodes; rotations
+//     integrated at the nodes: omega += dt (m_ext - m_int) / I.
+//  7. kinetic-energy damping (quasi-static default): velocities are zeroed at each kinetic-energy peak.
+//  8. position update (eq (9)): x_c += dt sum_I S_I(x_c) v_I — the corners are shared by the domains,
+//     which therefore stay gap-free; grid connectivity refreshed.
+//  9. energies: internal (sigma:d), hourglass, kinetic, external work, damping.
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/analysis.hpp"
+#include "mpm/background_grid.hpp"
+#include "mpm/cpdi2_domains.hpp"
+#include "mpm/mpm_problem.hpp"
+#include "shell/belytschko_tsay_shell.hpp"
+
+namespace lamina::mpm {
+
+/// Energy bookkeeping (LS-DYNA GLSTAT style).
+struct EnergyBalance {
+  Real kinetic = 0, internal = 0, hourglass = 0, external = 0, damping = 0;
+  Real transfer = 0;  // kinetic energy lost in the grid transfer (PIC part of G2P), >= 0
+  /// kinetic + internal + hourglass + damping + transfer - external (0 = balanced).
+  Real total() const { return kinetic + internal + hourglass + damping + transfer - external; }
+  /// (kinetic + internal + hourglass + damping + transfer) / external work (1 = balanced).
+  Real ratio() const { return external != 0 ? (kinetic + internal + hourglass + damping + transfer) / external : 1.0; }
+};
+
+class MpmAnalysis : public Analysis {
+ public:
+  /// Throws InputError for a bad mesh (defects), a grid too coarse for the elements, bad options.
+  MpmAnalysis(MpmProblem problem, std::vector<Probe> probes);
+  ~MpmAnalysis() override;
+
+  std::string method() const override { return "mpm"; }
+  void run(OutputSink& sink) override;
+  Real probe(const Probe& probe) const override;
+  std::map<std::string, Real> builtin_probes() const override;
+  OutputFrame frame() const override;
+  RunCounts counts() const override;
+  std::map<std::string, Real> timings() const override;
+
+  /// One explicit step at load factor `load` (quasi-static) or the current time (dynamic).
+  /// Returns the step size used. Throws AnalysisError on instability.
+  Real advance(Real load);
+  const EnergyBalance& energy() const { return energy_; }
+  Real residual_ratio() const { return residual_ratio_; }
+  Real time() const { return time_; }
+  Index steps() const { return steps_; }
+  const PointMatrix& positions() const { return x_; }
+  const PointMatrix& reference_positions() const { return reference_; }
+  Real grid_cell() const { return grid_.cell(); }
+  Real node_mass_total() const { return mass_.sum(); }
+  /// "shell" or "grid": which bound controlled the last time step.
+  const std::string& time_step_control() const { return dt_control_; }
+  const std::vector<Real>& level_residuals() const { return level_residual_; }
+  const std::vector<int>& unconverged_levels() const { return unconverged_levels_; }
+
+ private:
+  void compute_internal_forces(Real dt_stress);
+  void prepare_loads();
+  void compute_external_forces(Real load);
+  void apply_prescribed(Real load);
+  Real node_velocity_limit() const;
+
+  MpmProblem problem_;
+  std::vector<Probe> probes_;
+  std::unique_ptr<shell::LinearElasticShellMaterial> material_;
+  std::unique_ptr<shell::BelytschkoTsayShell> element_;
+  BackgroundGrid grid_;
+
+  // nodes (corners): structure of arrays
+  PointMatrix reference_, x_, v_, vpos_, omega_;
+  Eigen::VectorXd mass_, inertia_;
+  Eigen::Matrix3Xd free_, rotation_free_;  // 1 = free, 0 = prescribed (per component)
+  Eigen::Matrix3Xd f_int_, m_int_, f_ext_, m_ext_, f_net_;
+  std::vector<Index> incidence_begin_, incidence_;  // node -> element * 4 + corner
+
+  struct PreparedLoad {
+    std::vector<std::pair<Index, Real>> weights;  // node, share (force), edge length share (traction), mass (body force)
+    std::vector<Index> elements;                  // pressure
+    std::array<std::shared_ptr<geometry::Expression>, 3> expressions;
+    std::shared_ptr<geometry::Expression> scalar_expression;
+  };
+  std::vector<PreparedLoad> prepared_loads_;
+  Eigen::VectorXd transfer_loss_;
+
+  // elements
+  Eigen::MatrixXd stress_;                         // 5 * points x E
+  Eigen::Matrix<Real, 5, Eigen::Dynamic> hourglass_;
+  Eigen::VectorXd thickness_, element_power_, element_hourglass_power_, element_length_;
+  Eigen::Matrix<Real, 12, Eigen::Dynamic> element_force_, element_moment_;
+
+  // state
+  Real time_ = 0, dt_ = 0, dt_previous_ = 0, residual_ratio_ = 1, kinetic_previous_ = 0;
+  Real current_load_ = 0;
+  Index steps_ = 0;
+  std::string dt_control_ = "shell";
+  Real wave_speed_ = 0;
+  std::vector<int> unconverged_levels_;   // quasi-static levels that hit max_steps_per_level
+  std::vector<Real> level_residual_;      // residual ratio at each recorded load level
+  EnergyBalance energy_;
+  std::map<std::string, Real> stage_seconds_;
+};
+
+}  // namespace lamina::mpm

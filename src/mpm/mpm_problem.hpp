@@ -1,0 +1,70 @@
+#pragma once
+// Everything an MPM shell analysis needs, free of files and YAML: the shell mesh (CPDI2 domains),
+// material, shell section, nodal conditions and loads, and the solver options (seed 000 eqs (1)-(14), (38)-(40)).
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/shell_mesh.hpp"
+#include "core/types.hpp"
+#include "geometry/expression.hpp"
+#include "shell/belytschko_tsay_shell.hpp"
+
+namespace lamina::mpm {
+
+/// How a load grows over the analysis (s = load factor of a quasi-static run, t / end_time otherwise).
+struct LoadRamp {
+  enum class Kind { linear, step, table };
+  Kind kind = Kind::linear;
+  std::vector<std::array<Real, 2>> table;  // (s, factor) pairs
+  Real factor(Real s) const;
+};
+
+/// Velocity conditions at shell nodes (fix = zero velocity), applied on the grid and at the nodes (eq (7)).
+struct NodalConstraint {
+  IndexList nodes;
+  std::array<bool, 6> fixed{};                                          // x y z rx ry rz
+  std::array<std::optional<geometry::ScalarField>, 3> velocity;         // prescribed, expressions of x y z t
+  LoadRamp ramp;
+  std::string label;
+};
+
+struct NodalLoad {
+  enum class Kind { force, traction, pressure, body_force, moment, mass, initial_velocity };
+  Kind kind = Kind::force;
+  IndexList nodes;
+  std::array<geometry::ScalarField, 3> vector;  // force / traction / body force (per unit mass) / moment / velocity
+  geometry::ScalarField scalar;                 // pressure, mass
+  LoadRamp ramp;
+  std::string label;
+};
+
+struct MpmOptions {
+  enum class Kind { quasi_static, dynamic };
+  Kind analysis = Kind::quasi_static;
+  int load_levels = 10;           // quasi-static output levels (load factor k / load_levels)
+  Real end_time = 1.0;            // dynamic
+  int output_points = 10;         // dynamic: number of evenly spaced output times
+  Real alpha = 0.5;               // grid time-step factor of eq (38)
+  Real shell_safety = 0.9;        // factor on the shell's own stable step
+  Real fixed_time_step = 0.0;     // > 0: this step instead of the adaptive one (no stability check)
+  Real grid_cell = 0.0;           // 0: half the median element edge
+  Real flip = 0.0;                // FLIP fraction of the G2P velocity update (0 = PIC)
+  bool kinetic_damping = true;    // zero the velocities at every kinetic-energy peak (quasi-static default)
+  Real mass_damping = 0.0;        // c in f = -c m v, m_rot = -c I omega (1/time)
+  Real tolerance = 1e-4;          // quasi-static: residual ratio that ends a load level
+  Index max_steps_per_level = 2000000;
+  Index max_steps = 50000000;     // dynamic
+};
+
+struct MpmProblem {
+  ShellMesh mesh;
+  Real young = 0.0, poisson = 0.0, density = 0.0;
+  shell::ShellSection section;
+  std::vector<NodalConstraint> constraints;
+  std::vector<NodalLoad> loads;
+  MpmOptions options;
+};
+
+}  // namespace lamina::mpm

@@ -1,0 +1,230 @@
+#include "shell/belytschko_tsay_shell.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace lamina::shell {
+
+using Row4 = Eigen::Matrix<Real, 1, 4>;
+
+ThroughThicknessRule ThroughThicknessRule::lobatto(int n) {
+  ThroughThicknessRule r;
+  switch (n) {
+    case 1: r.points = {0.0}; r.weights = {2.0}; break;
+    case 2: r.points = {-1.0, 1.0}; r.weights = {1.0, 1.0}; break;
+    case 3: r.points = {-1.0, 0.0, 1.0}; r.weights = {1.0 / 3.0, 4.0 / 3.0, 1.0 / 3.0}; break;
+    case 4: {
+      const Real a = std::sqrt(1.0 / 5.0);
+      r.points = {-1.0, -a, a, 1.0};
+      r.weights = {1.0 / 6.0, 5.0 / 6.0, 5.0 / 6.0, 1.0 / 6.0};
+      break;
+    }
+    case 5: {
+      const Real a = std::sqrt(3.0 / 7.0);
+      r.points = {-1.0, -a, 0.0, a, 1.0};
+      r.weights = {0.1, 49.0 / 90.0, 32.0 / 45.0, 49.0 / 90.0, 0.1};
+      break;
+    }
+    case 6: {
+      const Real a = std::sqrt(1.0 / 3.0 - 2.0 * std::sqrt(7.0) / 21.0), b = std::sqrt(1.0 / 3.0 + 2.0 * std::sqrt(7.0) / 21.0);
+      const Real wa = (14.0 + std::sqrt(7.0)) / 30.0, wb = (14.0 - std::sqrt(7.0)) / 30.0;
+      r.points = {-1.0, -b, -a, a, b, 1.0};
+      r.weights = {1.0 / 15.0, wb, wa, wa, wb, 1.0 / 15.0};
+      break;
+    }
+    case 7: {
+      const Real s = 2.0 * std::sqrt(5.0 / 3.0) / 11.0;
+      const Real a = std::sqrt(5.0 / 11.0 - s), b = std::sqrt(5.0 / 11.0 + s);
+      const Real wa = (124.0 + 7.0 * std::sqrt(15.0)) / 350.0, wb = (124.0 - 7.0 * std::sqrt(15.0)) / 350.0;
+      r.points = {-1.0, -b, -a, 0.0, a, b, 1.0};
+      r.weights = {1.0 / 21.0, wb, wa, 256.0 / 525.0, wa, wb, 1.0 / 21.0};
+      break;
+    }
+    default: throw std::invalid_argument("Lobatto rule: 1 to 7 points through the thickness");
+  }
+  return r;
+}
+
+BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const ShellMaterial& material)
+    : section_(section), material_(material), rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
+
+bool BelytschkoTsayShell::corotational_frame(const NodeMatrix& x, Mat3& rotation) {
+  const Vec3 r31 = x.col(2) - x.col(0), r42 = x.col(3) - x.col(1);
+  Vec3 e3 = r31.cross(r42);
+  const Real n3 = e3.norm();
+  const Real scale = std::max(r31.squaredNorm(), r42.squaredNorm());
+  if (!(n3 > 1e-12 * scale) || !std::isfinite(n3)) return false;
+  e3 /= n3;
+  const Vec3 r21 = x.col(1) - x.col(0);
+  Vec3 e1 = r21 - r21.dot(e3) * e3;
+  const Real n1 = e1.norm();
+  if (!(n1 > 1e-12 * std::sqrt(scale))) return false;
+  e1 /= n1;
+  const Vec3 e2 = e3.cross(e1);
+  rotation.row(0) = e1.transpose();
+  rotation.row(1) = e2.transpose();
+  rotation.row(2) = e3.transpose();
+  return true;
+}
+
+Real BelytschkoTsayShell::stable_time_step(const NodeMatrix& x) const {
+  Mat3 R;
+  if (!corotational_frame(x, R)) return 0.0;
+  const Vec3 centre = x.rowwise().mean();
+  const NodeMatrix xl = R * (x.colwise() - centre);
+  const Real area2 = (xl(0, 2) - xl(0, 0)) * (xl(1, 3) - xl(1, 1)) + (xl(0, 1) - xl(0, 3)) * (xl(1, 2) - xl(1, 0));
+  const Real longest = std::max((x.col(2) - x.col(0)).norm(), (x.col(3) - x.col(1)).norm());
+  if (!(area2 > 0) || longest <= 0) return 0.0;
+  return stable_time_step(0.5 * area2 / longest);
+}
+
+Real BelytschkoTsayShell::stable_time_step(Real characteristic_length) const {
+  // hourglass springs add about r of the membrane stiffness
+  const Real c = material_.plate_wave_speed() * std::sqrt(1.0 + section_.hourglass);
+  return characteristic_length / c;
+}
+
+ShellResultants BelytschkoTsayShell::resultants(const Real* stress, Real thickness) const {
+  ShellResultants r;
+  const int nq = thickness_points();
+  for (int q = 0; q < nq; ++q) {
+    const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * thickness;
+    const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * thickness;
+    const Real* s = stress + kStressComponents * q;
+    r.nxx += w * s[0];
+    r.nyy += w * s[1];
+    r.nxy += w * s[2];
+    r.qyz += w * s[3] * section_.shear_factor;
+    r.qxz += w * s[4] * section_.shear_factor;
+    r.mxx += w * z * s[0];
+    r.myy += w * z * s[1];
+    r.mxy += w * z * s[2];
+  }
+  return r;
+}
+
+ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMatrix& v, const NodeMatrix& omega, Real dt,
+                                               Real* stress, Real* hourglass, Real& thickness) const {
+  ShellElementResult out;
+  Mat3 R;
+  if (!corotational_frame(x, R)) {
+    out.valid = false;
+    return out;
+  }
+  // local coordinates (origin at the centroid), velocities, angular velocities (eq (17))
+  const Vec3 centre = x.rowwise().mean();
+  const NodeMatrix xl = R * (x.colwise() - centre);
+  NodeMatrix vl = R * v;
+  const NodeMatrix wl = R * omega;
+  const Row4 xh = xl.row(0), yh = xl.row(1), zh = xl.row(2);
+
+  const Real area2 = (xh(2) - xh(0)) * (yh(3) - yh(1)) + (xh(1) - xh(3)) * (yh(2) - yh(0));
+  if (!(area2 > 0.0) || !std::isfinite(area2)) {
+    out.valid = false;
+    return out;
+  }
+  const Real area = 0.5 * area2;
+  out.area = area;
+  const Real longest = std::max((x.col(2) - x.col(0)).norm(), (x.col(3) - x.col(1)).norm());
+  out.characteristic_length = area / longest;
+  Row4 b1, b2;  // dN/dx, dN/dy at the centre (eq (20))
+  b1 << yh(1) - yh(3), yh(2) - yh(0), yh(3) - yh(1), yh(0) - yh(2);
+  b2 << xh(3) - xh(1), xh(0) - xh(2), xh(1) - xh(3), xh(2) - xh(0);
+  b1 /= area2;
+  b2 /= area2;
+
+  // warping correction: remove the in-plane velocities a rigid rotation about e1, e2 gives warped nodes
+  const bool warped = section_.warping_correction && zh.cwiseAbs().maxCoeff() > 1e-12 * std::sqrt(area);
+  if (warped) {
+    const Real rot_x = b2.dot(vl.row(2));   // omega_x of the rigid part: dvz/dy
+    const Real rot_y = -b1.dot(vl.row(2));  // omega_y: -dvz/dx
+    vl.row(0) -= rot_y * zh;
+    vl.row(1) += rot_x * zh;
+  }
+  const Row4 vx = vl.row(0), vy = vl.row(1), vz = vl.row(2), tx = wl.row(0), ty = wl.row(1);
+
+  // membrane, curvature and transverse shear rates (eqs (21)-(24))
+  const Real dx = b1.dot(vx), dy = b2.dot(vy), dxy2 = b2.dot(vx) + b1.dot(vy);
+  const Real kx = b1.dot(ty), ky = -b2.dot(tx), kxy2 = b2.dot(ty) - b1.dot(tx);
+  const Real dxz2 = b1.dot(vz) + 0.25 * ty.sum();
+  const Real dyz2 = b2.dot(vz) - 0.25 * tx.sum();
+
+  // stress update through the thickness and resultants (eqs (27)-(29))
+  const Real h = thickness;
+  const int nq = thickness_points();
+  Real nxx = 0, nyy = 0, nxy = 0, mxx = 0, myy = 0, mxy = 0, qxz = 0, qyz = 0;
+  Real power = 0.0, dzz_mean = 0.0;
+  const Real k = section_.shear_factor;
+  for (int q = 0; q < nq; ++q) {
+    const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * h;
+    const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * h;
+    const Real rate[kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
+    Real* s = stress + kStressComponents * q;
+    Real old[kStressComponents];
+    std::copy(s, s + kStressComponents, old);
+    dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * material_.update(s, rate, dt);
+    power += w * (0.5 * (old[0] + s[0]) * rate[0] + 0.5 * (old[1] + s[1]) * rate[1] + 0.5 * (old[2] + s[2]) * rate[2] +
+                  k * 0.5 * (old[3] + s[3]) * rate[3] + k * 0.5 * (old[4] + s[4]) * rate[4]);
+    nxx += w * s[0];
+    nyy += w * s[1];
+    nxy += w * s[2];
+    qyz += w * k * s[3];
+    qxz += w * k * s[4];
+    mxx += w * z * s[0];
+    myy += w * z * s[1];
+    mxy += w * z * s[2];
+  }
+  out.internal_power = power * area;
+
+  // nodal forces and moments: power conjugates of the rates (eqs (25)-(26))
+  NodeMatrix fl, ml;
+  fl.row(0) = area * (b1 * nxx + b2 * nxy);
+  fl.row(1) = area * (b2 * nyy + b1 * nxy);
+  fl.row(2) = area * (b1 * qxz + b2 * qyz);
+  ml.row(0) = area * (-b2 * myy - b1 * mxy - Row4::Constant(0.25 * qyz));
+  ml.row(1) = area * (b1 * mxx + b2 * mxy + Row4::Constant(0.25 * qxz));
+  ml.row(2).setZero();
+
+  // hourglass resistance (eqs (30)-(36))
+  if (section_.hourglass > 0.0) {
+    Row4 hv;
+    hv << 1.0, -1.0, 1.0, -1.0;
+    const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
+    const Real bsq = b1.squaredNorm() + b2.squaredNorm();
+    const Real E = material_.young_modulus(), G = material_.shear_modulus(), r = section_.hourglass;
+    const Real c_bend = r * E * h * h * h * area / 192.0 * bsq;
+    const Real c_w = r * k * G * h * h * h / 12.0 * bsq;
+    const Real c_mem = r * E * h * area / 8.0 * bsq;
+    const Real rates[kHourglassSize] = {gamma.dot(tx), gamma.dot(ty), gamma.dot(vz), gamma.dot(vx), gamma.dot(vy)};
+    const Real stiff[kHourglassSize] = {c_bend, c_bend, c_w, c_mem, c_mem};
+    Real hg_power = 0.0;
+    for (int i = 0; i < kHourglassSize; ++i) {
+      const Real old = hourglass[i];
+      hourglass[i] += dt * stiff[i] * rates[i];
+      hg_power += 0.5 * (old + hourglass[i]) * rates[i];
+    }
+    out.hourglass_power = hg_power;
+    ml.row(0) += gamma * hourglass[0];
+    ml.row(1) += gamma * hourglass[1];
+    fl.row(2) += gamma * hourglass[2];
+    fl.row(0) += gamma * hourglass[3];
+    fl.row(1) += gamma * hourglass[4];
+  }
+
+  // transpose of the warping projection: in-plane forces at warped nodes feed the transverse forces
+  if (warped) {
+    const Real sx = fl.row(0).dot(zh), sy = fl.row(1).dot(zh);
+    fl.row(2) += -sx * (-b1) + sy * b2;  // d(v_x)/d(vz_J) = -z_I * (-b1_J), d(v_y)/d(vz_J) = z_I * b2_J
+  }
+
+  // thickness update (plane stress)
+  thickness = h * (1.0 + dt * dzz_mean);
+
+  // back to the global frame (eq (37))
+  out.force = R.transpose() * fl;
+  out.moment = R.transpose() * ml;
+  return out;
+}
+
+}  // namespace lamina::shell

@@ -1,0 +1,90 @@
+#pragma once
+// The Belytschko-Tsay (Belytschko-Lin-Tsay) 4-node shell element: corotational frame, one-point
+// in-plane quadrature, Lobatto points through the thickness, hourglass resistance; seed 000 eqs (17)-(37).
+//
+// Kinematics (Mindlin, local frame, seed eqs (17)-(20)): v_x = v_x^m + z theta_y, v_y = v_y^m - z theta_x.
+// Velocity strains (eqs (21)-(24)) at fibre height z:
+//   d_x = B1.vx + z B1.ty,  d_y = B2.vy - z B2.tx,  2d_xy = B2.vx + B1.vy + z (B2.ty - B1.tx),
+//   2d_xz = B1.vz + N.ty,   2d_yz = B2.vz - N.tx      (N_I = 1/4, B = dN/dx at the centre)
+// Resultants (eq (28)) over the Lobatto points (eq (29)); nodal forces and moments (eqs (25)-(26)) are
+// the power conjugates of the rates; hourglass resistance (eqs (30)-(36), Belytschko-Tsay 1983 with the
+// Flanagan-Belytschko gamma vectors); global forces f = Q^T f_hat (eq (37)).
+// Warping correction: a Belytschko-Wong-Chiang-type rigid-body projection (the in-plane velocities
+// of warped nodes lose the part produced by the element's rigid rotation about its in-plane axes,
+// and the transposed projection is applied to the forces), so a warped element under rigid rotation
+// gives zero strain rates and no hourglass forces, and its forces are in moment equilibrium.
+#include <vector>
+
+#include "core/types.hpp"
+#include "shell/shell_material.hpp"
+
+namespace lamina::shell {
+
+using NodeMatrix = Eigen::Matrix<Real, 3, 4>;  // one column per element node (counter-clockwise)
+
+/// Lobatto (Gauss-Lobatto) points and weights on [-1, 1] through the thickness (seed eq (29)).
+struct ThroughThicknessRule {
+  std::vector<Real> points, weights;
+  /// n = 2 ... 7 points (n = 1: the mid-surface point with weight 2, membrane only).
+  static ThroughThicknessRule lobatto(int n);
+};
+
+struct ShellSection {
+  int thickness_points = 3;          // Lobatto points through the thickness
+  Real shear_factor = 5.0 / 6.0;     // transverse shear correction k
+  Real hourglass = 0.1;              // hourglass coefficient r (membrane, bending and transverse)
+  bool warping_correction = true;    // BWC-type rigid-body projection for warped elements
+};
+
+/// What one element evaluation returns (global frame).
+struct ShellElementResult {
+  NodeMatrix force = NodeMatrix::Zero();   // internal nodal forces (resisting)
+  NodeMatrix moment = NodeMatrix::Zero();  // internal nodal moments
+  Real internal_power = 0.0;               // sigma : d over the element (mid-step stress)
+  Real hourglass_power = 0.0;              // Q . q_dot (mid-step hourglass resultants)
+  Real area = 0.0;
+  Real characteristic_length = 0.0;       // area / longest diagonal (stable step length)
+  bool valid = true;                       // false: degenerate or inverted element
+};
+
+/// Local stress resultants per unit width (for output): membrane N, moments M, shear Q.
+struct ShellResultants {
+  Real nxx = 0, nyy = 0, nxy = 0, mxx = 0, myy = 0, mxy = 0, qxz = 0, qyz = 0;
+};
+
+/// The element kernel. Stateless apart from the section and material: the per-element state
+/// (stresses at the through-thickness points, hourglass resultants, thickness) is passed in.
+class BelytschkoTsayShell {
+ public:
+  BelytschkoTsayShell(const ShellSection& section, const ShellMaterial& material);
+
+  int thickness_points() const { return static_cast<int>(rule_.points.size()); }
+  /// Doubles of stress state per element (5 per through-thickness point).
+  int stress_size() const { return kStressComponents * thickness_points(); }
+  static constexpr int kHourglassSize = 5;  // bending x, bending y, transverse w, membrane x, membrane y
+
+  /// Advance the element by one step: rates from the node velocities v and angular velocities
+  /// omega at the configuration x (global frame), stress update over dt, internal forces.
+  /// stress (stress_size()), hourglass (5) and thickness are updated in place.
+  ShellElementResult update(const NodeMatrix& x, const NodeMatrix& v, const NodeMatrix& omega, Real dt, Real* stress,
+                            Real* hourglass, Real& thickness) const;
+
+  /// Stress resultants of the current state (local frame).
+  ShellResultants resultants(const Real* stress, Real thickness) const;
+
+  /// Corotational frame: rows e1, e2, e3 (seed eq (17)). Returns false for a degenerate element.
+  static bool corotational_frame(const NodeMatrix& x, Mat3& rotation);
+  /// Element stable time step L_s / c with L_s = area / longest diagonal (LS-DYNA's conservative
+  /// choice; area / longest edge is unconservative for skewed quads), c = plate wave speed
+  /// stiffened by the hourglass coefficient; no safety factor.
+  Real stable_time_step(const NodeMatrix& x) const;
+  /// The same from a characteristic length (area / longest diagonal).
+  Real stable_time_step(Real characteristic_length) const;
+
+ private:
+  ShellSection section_;
+  const ShellMaterial& material_;
+  ThroughThicknessRule rule_;
+};
+
+}  // namespace lamina::shell

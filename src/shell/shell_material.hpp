@@ -1,0 +1,45 @@
+#pragma once
+// Plane-stress constitutive update at one through-thickness point of a shell, in the element's
+// corotational frame (seed 000 eqs (27)-(29): stresses updated by plain increments of the local rates).
+#include <memory>
+
+#include "core/types.hpp"
+
+namespace lamina::shell {
+
+/// Local stress components at one through-thickness point: xx, yy, xy, yz, zx.
+constexpr int kStressComponents = 5;
+
+/// A plane-stress (sigma_zz = 0) material in the corotational frame. The update is called once per
+/// element, through-thickness point and step; implementations keep any history they need in the
+/// stress array (and later in extra per-point state), so plasticity fits the same interface.
+class ShellMaterial {
+ public:
+  virtual ~ShellMaterial() = default;
+  /// sigma (5 components) is advanced by the rates over dt. rate = (d_xx, d_yy, 2 d_xy, 2 d_yz, 2 d_zx).
+  /// Returns the thickness strain rate d_zz that keeps sigma_zz = 0.
+  virtual Real update(Real* sigma, const Real* rate, Real dt) const = 0;
+  virtual Real young_modulus() const = 0;
+  virtual Real poisson_ratio() const = 0;
+  virtual Real density() const = 0;
+  Real shear_modulus() const { return young_modulus() / (2.0 * (1.0 + poisson_ratio())); }
+  /// Plane-stress dilatational wave speed sqrt(E / (rho (1 - nu^2))) (shell stable step).
+  Real plate_wave_speed() const;
+  /// 3D dilatational wave speed sqrt((K + 4G/3) / rho) of seed 000 eq (40).
+  Real dilatational_wave_speed() const;
+};
+
+/// Linear elastic (hypoelastic) plane stress in the corotational frame.
+class LinearElasticShellMaterial final : public ShellMaterial {
+ public:
+  LinearElasticShellMaterial(Real young, Real poisson, Real density);
+  Real update(Real* sigma, const Real* rate, Real dt) const override;
+  Real young_modulus() const override { return young_; }
+  Real poisson_ratio() const override { return poisson_; }
+  Real density() const override { return density_; }
+
+ private:
+  Real young_, poisson_, density_;
+};
+
+}  // namespace lamina::shell

@@ -1,0 +1,141 @@
+// CPDI2 domains (seed 000 eqs (15)-(16)) and the sparse background grid: weights reproduce
+// constants and linear fields, mass shares equal the exact integrals of the corner shape
+// functions, bad elements are found, transfers do not depend on the thread count.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <random>
+
+#include "mpm/background_grid.hpp"
+#include "mpm/cpdi2_domains.hpp"
+
+namespace lamina::mpm {
+namespace {
+
+TEST(mpm_Cpdi2Domains, CornerWeightsAreExactIntegralsOfTheBilinearShapes) {
+  Eigen::Matrix<Real, 2, 4> p;
+  p << 0.0, 2.0, 2.6, -0.3, 0.0, 0.2, 1.7, 1.1;  // a general convex quad
+  const Cpdi2CornerWeights w = cpdi2_corner_weights(p);
+  // reference: 2 x 2 Gauss integration of N_c over the quad, divided by its area
+  const Real g = 1.0 / std::sqrt(3.0);
+  Eigen::Matrix<Real, 1, 4> integral = Eigen::Matrix<Real, 1, 4>::Zero();
+  Real area = 0;
+  for (Real xi : {-g, g})
+    for (Real eta : {-g, g}) {
+      const Real N[4] = {0.25 * (1 - xi) * (1 - eta), 0.25 * (1 + xi) * (1 - eta), 0.25 * (1 + xi) * (1 + eta), 0.25 * (1 - xi) * (1 + eta)};
+      const Eigen::Vector2d dxi = 0.25 * (-(1 - eta) * p.col(0) + (1 - eta) * p.col(1) + (1 + eta) * p.col(2) - (1 + eta) * p.col(3));
+      const Eigen::Vector2d deta = 0.25 * (-(1 - xi) * p.col(0) - (1 + xi) * p.col(1) + (1 + xi) * p.col(2) + (1 - xi) * p.col(3));
+      const Real J = dxi.x() * deta.y() - dxi.y() * deta.x();
+      area += J;
+      for (int c = 0; c < 4; ++c) integral[c] += N[c] * J;
+    }
+  EXPECT_NEAR(w.area, area, 1e-12);
+  for (int c = 0; c < 4; ++c) EXPECT_NEAR(w.value[c], integral[c] / area, 1e-12) << "corner " << c;
+  EXPECT_NEAR(w.value.sum(), 1.0, 1e-14);
+  // gradient weights: sum zero, exact for linear fields (sum_c g_c x_c^T = I)
+  EXPECT_LT(w.gradient.rowwise().sum().cwiseAbs().maxCoeff(), 1e-14);
+  const Eigen::Matrix2d identity = w.gradient * p.transpose();
+  EXPECT_LT((identity - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff(), 1e-13);
+  // parallelogram: a quarter each
+  Eigen::Matrix<Real, 2, 4> q;
+  q << 0, 2, 2.5, 0.5, 0, 0, 1, 1;
+  const Cpdi2CornerWeights wq = cpdi2_corner_weights(q);
+  for (int c = 0; c < 4; ++c) EXPECT_NEAR(wq.value[c], 0.25, 1e-14);
+}
+
+ShellMesh strip(int nx, int ny, Real lx, Real ly) {
+  ShellMesh m;
+  m.thickness = 0.1;
+  m.nodes.resize(3, (nx + 1) * (ny + 1));
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.nodes.col(j * (nx + 1) + i) = Vec3(lx * i / nx, ly * j / ny, 0.0);
+  m.quads.resize(4, nx * ny);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const Index n0 = j * (nx + 1) + i;
+      m.quads.col(j * nx + i) << n0, n0 + 1, n0 + nx + 2, n0 + nx + 1;
+    }
+  return m;
+}
+
+TEST(mpm_Cpdi2Domains, MassAndScaledRotationalInertia) {
+  const ShellMesh m = strip(4, 2, 4.0, 1.0);
+  const Cpdi2Domains d(m, 2.0);
+  ASSERT_TRUE(d.defects().empty());
+  EXPECT_NEAR(d.node_mass().sum(), 2.0 * 0.1 * 4.0, 1e-12);
+  // each element 1 x 0.5: A/8 = 0.0625 > h^2/12
+  EXPECT_NEAR(d.node_inertia().sum(), 2.0 * 0.1 * 4.0 * 0.0625, 1e-12);
+}
+
+TEST(mpm_Cpdi2Domains, BadElementsAreReported) {
+  ShellMesh inverted = strip(3, 1, 3.0, 1.0);
+  std::swap(inverted.quads(1, 1), inverted.quads(3, 1));  // clockwise element between counter-clockwise ones
+  const Cpdi2Domains a(inverted, 1.0);
+  ASSERT_FALSE(a.defects().empty());
+  EXPECT_NE(a.defects().front().what.find("orientation"), std::string::npos);
+
+  ShellMesh zero = strip(2, 1, 2.0, 1.0);
+  zero.nodes.col(1) = zero.nodes.col(0);  // collapse an edge... and make the element a triangle with zero area
+  zero.nodes.col(4) = zero.nodes.col(3);
+  const Cpdi2Domains b(zero, 1.0);
+  ASSERT_FALSE(b.defects().empty());
+
+  ShellMesh bowtie = strip(1, 1, 1.0, 1.0);
+  bowtie.nodes.col(2).swap(bowtie.nodes.col(3));  // self-intersecting
+  const Cpdi2Domains c(bowtie, 1.0);
+  ASSERT_FALSE(c.defects().empty());
+}
+
+TEST(mpm_BackgroundGrid, ShapeFunctionsReproduceLinearFields) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<Real> u(-2.0, 5.0);
+  PointMatrix x(3, 200);
+  for (Index c = 0; c < x.cols(); ++c) x.col(c) = Vec3(u(rng), u(rng), 0.1 * u(rng));
+  BackgroundGrid grid(Vec3(-3, -3, -3), 0.37);
+  grid.locate(x);
+  for (Index c = 0; c < x.cols(); ++c) {
+    Real sum = 0;
+    Vec3 position = Vec3::Zero();
+    for (int k = 0; k < BackgroundGrid::kNodesPerCorner; ++k) {
+      sum += grid.weight(c, k);
+      position += grid.weight(c, k) * grid.node_position(grid.slot(c, k));
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-13);
+    EXPECT_LT((position - x.col(c)).norm(), 1e-12);
+  }
+}
+
+TEST(mpm_BackgroundGrid, TransfersConserveAndDoNotDependOnThreads) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> u(0.0, 30.0);
+  PointMatrix x(3, 5000), q(3, 5000);
+  for (Index c = 0; c < x.cols(); ++c) {
+    x.col(c) = Vec3(u(rng), u(rng), u(rng));
+    q.col(c) = Vec3(u(rng), -u(rng), 1.0);
+  }
+  const Eigen::Matrix3Xd mask = Eigen::Matrix3Xd::Ones(3, x.cols());
+  BackgroundGrid grid(Vec3::Zero(), 1.0);
+  grid.locate(x);
+  Eigen::Matrix3Xd g1, g2;
+  PointMatrix back1, back2;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  grid.scatter(q, mask, g1);
+  grid.gather(g1, back1);
+  omp_set_num_threads(2);
+  grid.scatter(q, mask, g2);
+  grid.gather(g2, back2);
+  omp_set_num_threads(threads);
+  EXPECT_EQ((g1 - g2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((back1 - back2).cwiseAbs().maxCoeff(), 0.0);
+  // P2G conserves the total
+  EXPECT_LT((g1.rowwise().sum() - q.rowwise().sum()).cwiseAbs().maxCoeff(), 1e-9 * q.cwiseAbs().sum());
+  // moving without changing cells keeps the connectivity
+  PointMatrix y = x;
+  y.array() += 0.0;
+  EXPECT_FALSE(grid.locate(y));
+}
+
+}  // namespace
+}  // namespace lamina::mpm

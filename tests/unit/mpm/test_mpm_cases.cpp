@@ -1,0 +1,98 @@
+// `method: mpm` end to end through the lamina binary: bad shell meshes and a grid too coarse for the
+// elements are rejected with exit 2 and a clear message; a run made unstable stops with exit 3;
+// a small linear cantilever matches beam theory (issue 5 acceptance 5).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int exit_code = -1;
+  std::string output;
+};
+
+Outcome run_case(const std::string& name, const std::string& yaml, const std::string& extra = "") {
+  const fs::path dir = fs::temp_directory_path() / ("lamina_mpm_test_" + name);
+  fs::create_directories(dir);
+  const fs::path file = dir / (name + ".yaml");
+  std::ofstream(file) << yaml;
+  const std::string command = std::string(LAMINA_BINARY) + " run " + file.string() + " -o " + (dir / "out").string() +
+                              " --quiet --threads 1 " + extra + " 2>&1";
+  Outcome o;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe.get())) o.output += buffer.data();
+  const int status = pclose(pipe.release());
+  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+const std::string kStrip = R"(
+title: strip
+method: mpm
+materials:
+  - {name: s, model: linear_elastic, E: 1.2e6, nu: 0.0, density: 1.0}
+geometry: {type: plate, min: [0, 0], max: [10, 1], thickness: 0.1}
+discretization: {elements: [10, 1]}
+boundary:
+  - {select: {set: xmin}, fix: [x, y, z, rx, ry, rz]}
+loads:
+  - {select: {set: xmax}, traction: [0, 0, 0.004]}
+mpm: {load_levels: 1, tolerance: 1.0e-5}
+probes:
+  - {name: w_tip, field: displacement, component: z, at: [10, 0, 0]}
+)";
+
+TEST(mpm_Cases, LinearCantileverMatchesBeamTheory) {
+  const Outcome o = run_case("linear", kStrip);
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  std::ifstream summary(fs::temp_directory_path() / "lamina_mpm_test_linear" / "out" / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"w_tip\":");
+  ASSERT_NE(at, std::string::npos);
+  const double w = std::stod(text.substr(at + 8));
+  // P L^3 / (3 EI) + P L / (k G A): P = 0.004, L = 10, EI = 100, k G A = 5/6 * 6e5 * 0.1
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  EXPECT_NEAR(w, exact, 0.01 * exact);
+}
+
+TEST(mpm_Cases, DegenerateElementsAreRejected) {
+  // a sphere cap without a polar hole has quadrilaterals with the pole node repeated
+  const std::string yaml = R"(
+title: cap
+method: mpm
+materials:
+  - {name: s, model: linear_elastic, E: 1.0e6, nu: 0.3, density: 1.0}
+geometry: {type: sphere_cap, radius: 10, thickness: 0.1, polar_hole: 0, sector: 90}
+discretization: {elements: [4, 4]}
+loads:
+  - {select: all, body_force: [0, 0, -1]}
+)";
+  const Outcome o = run_case("degenerate", yaml);
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("discretization.elements"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("repeated node"), std::string::npos) << o.output;
+}
+
+TEST(mpm_Cases, GridTooCoarseIsRejected) {
+  const Outcome o = run_case("coarse", kStrip, "--set discretization.grid.cell=5.0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("discretization.grid.cell"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("median element edge"), std::string::npos) << o.output;
+}
+
+TEST(mpm_Cases, UnstableRunStopsWithExitThree) {
+  const Outcome o = run_case("unstable", kStrip, "--set mpm.time_step.fixed=0.01");
+  EXPECT_EQ(o.exit_code, 3) << o.output;
+  EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
+}
+
+}  // namespace

@@ -1,0 +1,209 @@
+// Belytschko-Tsay shell kernel (seed 000 eqs (17)-(37)): rigid-body motion gives no force, membrane and
+// bending patches give the analytic resultants and nodal forces, the stable step is conservative.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "shell/belytschko_tsay_shell.hpp"
+
+namespace lamina::shell {
+namespace {
+
+Mat3 some_rotation() {
+  return (Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()) * Eigen::AngleAxisd(-0.4, Vec3(0, 1, 0))).toRotationMatrix();
+}
+
+/// Element corners in a local plane (a x b rectangle, optional skew), rotated into 3D.
+NodeMatrix element(const Mat3& R, Real a, Real b, Real skew = 0.0, Real warp = 0.0) {
+  NodeMatrix local;
+  local << 0, a, a + skew, skew, 0, 0, b, b, warp, -warp, warp, -warp;
+  return R * local + Vec3(1.0, -2.0, 0.5).replicate<1, 4>();
+}
+
+struct Fixture {
+  ShellSection section;
+  LinearElasticShellMaterial material{2.0e5, 0.3, 7.8e-3};
+  Real h = 0.1;
+};
+
+TEST(shell_BelytschkoTsay, LobattoRulesIntegratePolynomialsExactly) {
+  for (int n = 2; n <= 7; ++n) {
+    const auto r = ThroughThicknessRule::lobatto(n);
+    const int degree = 2 * n - 3;
+    for (int p = 0; p <= degree; ++p) {
+      Real sum = 0;
+      for (int q = 0; q < n; ++q) sum += r.weights[q] * std::pow(r.points[q], p);
+      const Real exact = p % 2 ? 0.0 : 2.0 / (p + 1);
+      EXPECT_NEAR(sum, exact, 1e-13) << "n = " << n << ", degree " << p;
+    }
+  }
+}
+
+TEST(shell_BelytschkoTsay, RigidBodyMotionGivesNoForce) {
+  Fixture f;
+  BelytschkoTsayShell shell(f.section, f.material);
+  for (Real warp : {0.0, 0.05}) {
+    const NodeMatrix x = element(some_rotation(), 2.0, 1.0, 0.3, warp);
+    const Vec3 w(0.3, -1.2, 0.8), v0(1.0, 2.0, -3.0), centre = x.rowwise().mean();
+    NodeMatrix v, omega;
+    for (int a = 0; a < 4; ++a) {
+      v.col(a) = v0 + w.cross(x.col(a) - centre);
+      omega.col(a) = w;
+    }
+    std::vector<Real> stress(shell.stress_size(), 0.0);
+    Real hourglass[5] = {0, 0, 0, 0, 0};
+    Real h = f.h;
+    const auto r = shell.update(x, v, omega, 1e-3, stress.data(), hourglass, h);
+    ASSERT_TRUE(r.valid);
+    const Real scale = f.material.young_modulus() * f.h * 1e-3;  // force of a unit strain rate over dt
+    EXPECT_LT(r.force.cwiseAbs().maxCoeff(), 1e-12 * scale) << "warp " << warp;
+    EXPECT_LT(r.moment.cwiseAbs().maxCoeff(), 1e-12 * scale) << "warp " << warp;
+    for (Real s : stress) EXPECT_NEAR(s, 0.0, 1e-9);
+    EXPECT_NEAR(h, f.h, 1e-15);
+  }
+}
+
+TEST(shell_BelytschkoTsay, MembranePatchGivesAnalyticResultantsAndNodalForces) {
+  Fixture f;
+  f.section.hourglass = 0.1;
+  BelytschkoTsayShell shell(f.section, f.material);
+  const Mat3 R = some_rotation();
+  const Real a = 2.0, b = 1.0;
+  const NodeMatrix x = element(R, a, b);
+  // uniform local strain rate: d_x, d_y, 2 d_xy
+  const Real dx = 1e-3, dy = -4e-4, gxy = 6e-4, dt = 0.5;
+  Eigen::Matrix3d D;
+  D << dx, 0.5 * gxy, 0, 0.5 * gxy, dy, 0, 0, 0, 0;
+  const Vec3 centre = x.rowwise().mean();
+  NodeMatrix v;
+  for (int a2 = 0; a2 < 4; ++a2) v.col(a2) = R * (D * (R.transpose() * (x.col(a2) - centre)));
+  std::vector<Real> stress(shell.stress_size(), 0.0);
+  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real h = f.h;
+  const auto r = shell.update(x, v, NodeMatrix::Zero(), dt, stress.data(), hourglass, h);
+  ASSERT_TRUE(r.valid);
+  const Real E = 2.0e5, nu = 0.3, c = E / (1 - nu * nu), G = E / (2 * (1 + nu));
+  const ShellResultants n = shell.resultants(stress.data(), f.h);
+  const Real nxx = c * f.h * (dx + nu * dy) * dt, nyy = c * f.h * (dy + nu * dx) * dt, nxy = G * f.h * gxy * dt;
+  EXPECT_NEAR(n.nxx, nxx, 1e-10 * std::abs(nxx));
+  EXPECT_NEAR(n.nyy, nyy, 1e-10 * std::abs(nxx));
+  EXPECT_NEAR(n.nxy, nxy, 1e-10 * std::abs(nxx));
+  EXPECT_NEAR(n.mxx, 0.0, 1e-12 * std::abs(nxx));
+  // rectangle: nodes at x = a carry +N_xx b/2 (and N_xy b/2 along y), nodes at y = b carry N_yy a/2
+  const NodeMatrix local = R.transpose() * r.force;
+  const Real fx[4] = {-nxx * b / 2 - nxy * a / 2, nxx * b / 2 - nxy * a / 2, nxx * b / 2 + nxy * a / 2, -nxx * b / 2 + nxy * a / 2};
+  const Real fy[4] = {-nyy * a / 2 - nxy * b / 2, -nyy * a / 2 + nxy * b / 2, nyy * a / 2 + nxy * b / 2, nyy * a / 2 - nxy * b / 2};
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(local(0, k), fx[k], 1e-9 * std::abs(nxx)) << "node " << k;
+    EXPECT_NEAR(local(1, k), fy[k], 1e-9 * std::abs(nxx)) << "node " << k;
+    EXPECT_NEAR(local(2, k), 0.0, 1e-9 * std::abs(nxx)) << "node " << k;
+  }
+  EXPECT_LT(r.moment.cwiseAbs().maxCoeff(), 1e-9 * std::abs(nxx));
+  // plane stress thickness change: d_zz = -nu/(1-nu) (d_x + d_y)
+  EXPECT_NEAR(h, f.h * (1 - dt * nu / (1 - nu) * (dx + dy)), 1e-15);
+  // power = N : d over the area (mid-step stress = half the final one)
+  EXPECT_NEAR(r.internal_power, a * b * 0.5 * (nxx * dx + nyy * dy + nxy * gxy), 1e-9 * std::abs(r.internal_power));
+}
+
+TEST(shell_BelytschkoTsay, BendingPatchGivesAnalyticMomentsAndNodalMoments) {
+  Fixture f;
+  BelytschkoTsayShell shell(f.section, f.material);
+  const Mat3 R = some_rotation();
+  const Real a = 2.0, b = 1.0, dt = 0.25;
+  const NodeMatrix x = element(R, a, b);
+  const Real kx = 2e-3, ky = -1e-3;  // curvature rates: theta_y = kx x, theta_x = -ky y, w = -(kx x^2 + ky y^2)/2
+  const Vec3 centre = x.rowwise().mean();
+  NodeMatrix v, omega;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 p = R.transpose() * (x.col(k) - centre);
+    v.col(k) = R * Vec3(0, 0, -0.5 * (kx * p.x() * p.x() + ky * p.y() * p.y()));
+    omega.col(k) = R * Vec3(-ky * p.y(), kx * p.x(), 0);
+  }
+  std::vector<Real> stress(shell.stress_size(), 0.0);
+  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real h = f.h;
+  const auto r = shell.update(x, v, omega, dt, stress.data(), hourglass, h);
+  ASSERT_TRUE(r.valid);
+  const Real E = 2.0e5, nu = 0.3, D = E * f.h * f.h * f.h / (12 * (1 - nu * nu));
+  const ShellResultants m = shell.resultants(stress.data(), f.h);
+  const Real mxx = D * (kx + nu * ky) * dt, myy = D * (ky + nu * kx) * dt;
+  EXPECT_NEAR(m.mxx, mxx, 1e-10 * std::abs(mxx));
+  EXPECT_NEAR(m.myy, myy, 1e-10 * std::abs(mxx));
+  EXPECT_NEAR(m.mxy, 0.0, 1e-10 * std::abs(mxx));
+  EXPECT_NEAR(m.nxx, 0.0, 1e-10 * std::abs(mxx));
+  EXPECT_NEAR(m.qxz, 0.0, 1e-10 * std::abs(mxx));
+  EXPECT_NEAR(m.qyz, 0.0, 1e-10 * std::abs(mxx));
+  // nodal moments (local): m_y = +-M_xx b/2 at x = a / x = 0; m_x = -+M_yy a/2 at y = b / y = 0
+  const NodeMatrix local = R.transpose() * r.moment;
+  const Real my[4] = {-mxx * b / 2, mxx * b / 2, mxx * b / 2, -mxx * b / 2};
+  const Real mx[4] = {myy * a / 2, myy * a / 2, -myy * a / 2, -myy * a / 2};
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(local(1, k), my[k], 1e-9 * std::abs(mxx)) << "node " << k;
+    EXPECT_NEAR(local(0, k), mx[k], 1e-9 * std::abs(mxx)) << "node " << k;
+  }
+  EXPECT_LT((R.transpose() * r.force).cwiseAbs().maxCoeff(), 1e-9 * std::abs(mxx));
+}
+
+TEST(shell_BelytschkoTsay, HourglassModeIsResistedAndItsEnergyReported) {
+  Fixture f;
+  f.section.hourglass = 0.1;
+  BelytschkoTsayShell shell(f.section, f.material);
+  const NodeMatrix x = element(Mat3::Identity(), 1.0, 1.0);
+  NodeMatrix v = NodeMatrix::Zero();
+  v.row(2) << 1e-3, -1e-3, 1e-3, -1e-3;  // transverse hourglass (twist) pattern
+  std::vector<Real> stress(shell.stress_size(), 0.0);
+  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real h = f.h;
+  const auto r = shell.update(x, v, NodeMatrix::Zero(), 1.0, stress.data(), hourglass, h);
+  EXPECT_GT(r.force.row(2).dot(v.row(2)), 0.0);          // resisting
+  EXPECT_GT(r.hourglass_power, 0.0);
+  EXPECT_NEAR(r.internal_power, 0.0, 1e-20);             // one-point rule does not see it
+  f.section.hourglass = 0.0;
+  BelytschkoTsayShell free_shell(f.section, f.material);
+  Real hg2[5] = {0, 0, 0, 0, 0};
+  std::fill(stress.begin(), stress.end(), 0.0);
+  const auto r0 = free_shell.update(x, v, NodeMatrix::Zero(), 1.0, stress.data(), hg2, h);
+  EXPECT_LT(r0.force.cwiseAbs().maxCoeff(), 1e-15);
+}
+
+/// Largest frequency of one free element (lumped mass, rotational inertia m max(h^2/12, A/8)) by
+/// eigenvalues of the numerical stiffness: the element's stable step must not exceed 2 / omega_max.
+TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
+  Fixture f;
+  f.section.hourglass = 0.1;
+  for (Real nu : {0.3, 0.0})
+  for (Real aspect : {1.0, 3.0, 0.75}) {
+    f.material = LinearElasticShellMaterial(2.0e5, nu, 7.8e-3);
+    BelytschkoTsayShell shell(f.section, f.material);
+    const NodeMatrix x = element(some_rotation(), aspect, 1.0, aspect == 0.75 ? 0.0 : 0.2);
+    Eigen::Matrix<Real, 24, 24> K;
+    for (int j = 0; j < 24; ++j) {
+      NodeMatrix v = NodeMatrix::Zero(), w = NodeMatrix::Zero();
+      if (j < 12) v(j % 3, j / 3) = 1.0;
+      else w((j - 12) % 3, (j - 12) / 3) = 1.0;
+      std::vector<Real> stress(shell.stress_size(), 0.0);
+      Real hourglass[5] = {0, 0, 0, 0, 0};
+      Real h = f.h;
+      const auto r = shell.update(x, v, w, 1.0, stress.data(), hourglass, h);
+      Eigen::Matrix<Real, 24, 1> column;
+      column << Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.force.data()), Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.moment.data());
+      K.col(j) = column;
+    }
+    EXPECT_LT((K - K.transpose()).cwiseAbs().maxCoeff(), 1e-8 * K.cwiseAbs().maxCoeff());
+    const Real area = 0.5 * (x.col(2) - x.col(0)).cross(x.col(3) - x.col(1)).norm();
+    const Real m = f.material.density() * f.h * area / 4, I = m * std::max(f.h * f.h / 12, area / 8);
+    Eigen::Matrix<Real, 24, 1> mass;
+    mass << Eigen::Matrix<Real, 12, 1>::Constant(m), Eigen::Matrix<Real, 12, 1>::Constant(I);
+    const Eigen::Matrix<Real, 24, 24> A = mass.cwiseInverse().cwiseSqrt().asDiagonal() * (0.5 * (K + K.transpose())) *
+                                          mass.cwiseInverse().cwiseSqrt().asDiagonal();
+    const Real omega_max = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Real, 24, 24>>(A).eigenvalues().maxCoeff());
+    const Real critical = 2.0 / omega_max;
+    const Real estimate = shell.stable_time_step(x);
+    EXPECT_LE(estimate, critical) << "aspect " << aspect << " nu " << nu;
+    EXPECT_GE(estimate, 0.3 * critical) << "aspect " << aspect << " nu " << nu;  // not uselessly small
+  }
+}
+
+}  // namespace
+}  // namespace lamina::shell
