@@ -8,7 +8,10 @@ velocity field so that bonds deform.
 
 Figure: bond-updates per second = (directed bonds i->j within the horizon) x steps / loop time,
 where loop time is the time of the time-step loop only (LAMMPS "Loop time"; lamina's
-`stage_explicit_loop_s`), i.e. without reading the input or building the neighbour lists.
+`explicit_loop_s`), i.e. without reading the input or building the neighbour lists. lamina's loop
+also evaluates the strain and kinetic energy every step (LAMMPS: only at thermo output).
+Memory: lamina's peak resident memory divided by particles and by directed bonds (an upper bound:
+it includes the program, the case and the set-up).
 
 Usage: bench/pd_lps_vs_lammps.py [--lamina build/lamina] [--n 51] [--steps 20] [--threads 1 2]
 Ends with one `BENCH <name> <value> <unit>` line per figure (ratios lamina / LAMMPS included).
@@ -80,19 +83,22 @@ run {steps}
 
 
 def run_lamina(lamina, n, steps, threads, workdir):
-    """lamina explicit run on the same lattice; the case is written here from PRODUCT.md's keys."""
+    """lamina explicit run on the same lattice, written with PRODUCT.md's case keys."""
     extent = n * SPACING  # nodes at cell centres: n cells of size a per direction
-    wave_speed = (E / DENSITY) ** 0.5
+    dt = 1.0e-8
     case = f"""title: LPS cube for the LAMMPS side-by-side benchmark
 method: pd
 materials: [{{name: m, model: linear_elastic, E: {E}, nu: {NU}, density: {DENSITY}}}]
 geometry: {{type: box, min: [0, 0, 0], max: [{extent}, {extent}, {extent}]}}
 discretization: {{spacing: [{SPACING}, {SPACING}, {SPACING}], horizon_factor: {HORIZON_FACTOR}}}
+loads:
+  - select: all
+    initial_velocity: ["1e-3*sin(12345*x + 54321*y)", "1e-3*sin(23456*y + 65432*z)", "1e-3*sin(34567*z + 76543*x)"]
 pd:
   influence: one
   surface_correction: none
   analysis: explicit
-  explicit: {{steps: {steps}, time_step: 1.0e-8, random_velocity: 1.0e-3}}
+  explicit: {{end_time: {steps * dt}, time_step: {dt}, outputs: 1}}
 output: {{vtu: false}}
 """
     path = os.path.join(workdir, f"lamina_{n}_{threads}.yaml")
@@ -100,13 +106,16 @@ output: {{vtu: false}}
         f.write(case)
     out = os.path.join(workdir, f"lamina_{n}_{threads}")
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    subprocess.run([lamina, "run", path, "-o", out], check=True, env=env, stdout=subprocess.DEVNULL)
+    proc = subprocess.Popen([lamina, "run", path, "-o", out, "--quiet"], env=env)
+    _, status, usage = os.wait4(proc.pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise RuntimeError(f"lamina exited with {os.waitstatus_to_exitcode(status)}")
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     timing = summary["timing"]
-    return {"loop_s": timing["stage_explicit_loop_s"], "atoms": summary["counts"]["nodes"],
-            "bytes_per_particle": timing.get("stage_bytes_per_particle"),
-            "bytes_per_bond": timing.get("stage_bytes_per_bond")}
+    return {"loop_s": timing["stage_explicit_loop_s"] if "stage_explicit_loop_s" in timing
+            else timing["explicit_loop_s"], "atoms": summary["counts"]["nodes"],
+            "peak_bytes": usage.ru_maxrss * 1024.0, "bonds": timing.get("bonds", timing.get("stage_bonds"))}
 
 
 def main():
@@ -136,9 +145,8 @@ def main():
         bench += [(f"pd_lps_lammps_{threads}proc_bond_updates_per_s", rate_lmp, "bond_updates/s"),
                   (f"pd_lps_lamina_{threads}thread_bond_updates_per_s", rate_lam, "bond_updates/s"),
                   (f"pd_lps_speedup_lamina_over_lammps_{threads}", rate_lam / rate_lmp, "ratio")]
-        if lam.get("bytes_per_particle"):
-            bench += [("pd_memory_per_particle", lam["bytes_per_particle"], "bytes"),
-                      ("pd_memory_per_bond", lam["bytes_per_bond"], "bytes")]
+        bench += [("pd_peak_memory_per_particle", lam["peak_bytes"] / lam["atoms"], "bytes"),
+                  ("pd_peak_memory_per_bond", lam["peak_bytes"] / bonds, "bytes")]
     shutil.rmtree(workdir, ignore_errors=True)
     seen = set()
     for name, value, unit in bench:

@@ -21,7 +21,7 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
   const Real dt = 1.0;
   for (int k = 0;; ++k) {
     // Stage 1: internal force at U^k.
-    result.state = solid_.bond_state(u);
+    solid_.bond_state(u, result.state);
     result.internal_force = solid_.internal_force(result.state);
     const Eigen::Map<const Eigen::VectorXd> fint(result.internal_force.data(), dofs);
     // Stage 2: residual on the free dofs and the convergence test (seed eq (8)).

@@ -7,11 +7,28 @@
 
 namespace lamina::pd {
 
+LinearPeridynamicSolid::LinearPeridynamicSolid(const PeridynamicBody& body) : body_(body) {
+  reverse_weight_.resize(3, body.bonds());
+  reverse_modulus_.resize(body.bonds());
+#pragma omp parallel for schedule(static)
+  for (Index b = 0; b < body.bonds(); ++b) {
+    const Index r = body.reverse(b);
+    reverse_weight_.col(b) = body.dilatation_weight().col(r);
+    reverse_modulus_[b] = body.bond_modulus()[r];
+  }
+}
+
 BondState LinearPeridynamicSolid::bond_state(const PointMatrix& u, bool linearised) const {
+  BondState s;
+  bond_state(u, s, linearised);
+  return s;
+}
+
+void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool linearised) const {
   const PeridynamicBody& body = body_;
   const Index n = body.nodes();
   const bool planar = body.dimension() == 2;
-  BondState s;
+  // resize is a no-op when s already has the sizes (explicit and ADR loops reuse one state)
   s.direction.resize(3, body.bonds());
   s.length.resize(body.bonds());
   s.extension.resize(body.bonds());
@@ -60,13 +77,12 @@ BondState LinearPeridynamicSolid::bond_state(const PointMatrix& u, bool linearis
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
-      const Index j = body.neighbour(b), r = body.reverse(b);
+      const Index j = body.neighbour(b);
       const Real tij = s.dilatation_force.col(i).dot(w.col(b)) + c[b] * s.extension[b];
-      const Real tji = s.dilatation_force.col(j).dot(w.col(r)) + c[r] * s.extension[b];
+      const Real tji = s.dilatation_force.col(j).dot(reverse_weight_.col(b)) + reverse_modulus_[b] * s.extension[b];
       s.pair_force[b] = body.volumes()[i] * bv[b] * (tij + tji);
     }
   }
-  return s;
 }
 
 PointMatrix LinearPeridynamicSolid::internal_force(const BondState& s) const {

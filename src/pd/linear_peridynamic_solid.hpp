@@ -28,10 +28,13 @@ struct BondState {
 
 class LinearPeridynamicSolid {
  public:
-  explicit LinearPeridynamicSolid(const PeridynamicBody& body) : body_(body) {}
+  /// The body must be complete (calibrated): the solid caches its reverse-bond data.
+  explicit LinearPeridynamicSolid(const PeridynamicBody& body);
 
   /// Bond state of displacement u (3 x N). linearised: e = M0 . (u_j - u_i), M = xi / |xi| (small-strain theory).
   BondState bond_state(const PointMatrix& u, bool linearised = false) const;
+  /// The same into an existing state (no allocation when its sizes already fit).
+  void bond_state(const PointMatrix& u, BondState& state, bool linearised = false) const;
   /// Internal nodal forces F_int = -dPi/dU (3 x N) of a bond state.
   PointMatrix internal_force(const BondState& state) const;
   PointMatrix internal_force(const PointMatrix& u) const { return internal_force(bond_state(u)); }
@@ -51,6 +54,9 @@ class LinearPeridynamicSolid {
 
  private:
   const PeridynamicBody& body_;
+  // w and c of the reverse bond j->i stored at bond i->j, so the pair-force pass reads them in order
+  Eigen::Matrix3Xd reverse_weight_;
+  Eigen::VectorXd reverse_modulus_;
 };
 
 }  // namespace lamina::pd
