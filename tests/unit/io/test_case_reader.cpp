@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include "core/error.hpp"
 #include "io/case_reader.hpp"
 
@@ -17,7 +19,12 @@ std::vector<MethodKeys> methods() {
 }
 
 std::vector<Diagnostic> read_problems(const std::string& text, const std::vector<std::string>& overrides = {}) {
-  const auto path = (std::filesystem::temp_directory_path() / "lamina_case_reader_test.yaml").string();
+  // one file per test and process: ctest runs the tests of this file in parallel
+  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  const auto path = (std::filesystem::temp_directory_path() /
+                     ("lamina_case_reader_" + std::string(test ? test->name() : "test") + "_" +
+                      std::to_string(::getpid()) + ".yaml"))
+                        .string();
   std::ofstream(path) << text;
   try {
     CaseReader reader(path, overrides, methods());
