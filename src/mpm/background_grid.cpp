@@ -37,6 +37,7 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
     key_of_entry_.assign(entries, 0);
   }
   int changed = resized ? 1 : 0;
+  corner_moved_.resize(static_cast<std::size_t>(n));
   const Real inv = 1.0 / cell_;
   bool finite = true;
 #pragma omp parallel for schedule(static) reduction(| : changed) reduction(&& : finite) if (n > 1024)
@@ -50,8 +51,10 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
                        k = static_cast<std::int64_t>(std::floor(s.z()));
     const Real fx = s.x() - static_cast<Real>(i), fy = s.y() - static_cast<Real>(j), fz = s.z() - static_cast<Real>(k);
     const std::int64_t key = pack(i, j, k);
+    corner_moved_[static_cast<std::size_t>(c)] = 0;
     if (key != cell_of_corner_[static_cast<std::size_t>(c)]) {
       cell_of_corner_[static_cast<std::size_t>(c)] = key;
+      corner_moved_[static_cast<std::size_t>(c)] = 1;
       changed = 1;
       for (int a = 0; a < kNodesPerCorner; ++a)
         key_of_entry_[static_cast<std::size_t>(c * kNodesPerCorner + a)] = pack(i + (a & 1), j + ((a >> 1) & 1), k + ((a >> 2) & 1));
@@ -63,12 +66,26 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
   }
   if (!finite) throw AnalysisError("a shell node left the background grid's range (non-finite or runaway position)");
   if (!changed) return false;
+  // (key, entry) pairs in sorted order (unique pairs: the order is deterministic). After the first
+  // sort only the entries of corners that changed cell are re-sorted and merged into the rest.
+  if (resized || key_entry_.size() != entries) {
+    key_entry_.resize(entries);
+    for (std::size_t e = 0; e < entries; ++e) key_entry_[e] = {key_of_entry_[e], static_cast<Index>(e)};
+    std::sort(key_entry_.begin(), key_entry_.end());
+  } else {
+    kept_.clear();
+    moved_.clear();
+    for (const auto& ke : key_entry_) {
+      if (corner_moved_[static_cast<std::size_t>(ke.second / kNodesPerCorner)])
+        moved_.emplace_back(key_of_entry_[static_cast<std::size_t>(ke.second)], ke.second);
+      else
+        kept_.push_back(ke);
+    }
+    std::sort(moved_.begin(), moved_.end());
+    std::merge(kept_.begin(), kept_.end(), moved_.begin(), moved_.end(), key_entry_.begin());
+  }
   sorted_entries_.resize(entries);
-  std::iota(sorted_entries_.begin(), sorted_entries_.end(), Index(0));
-  std::sort(sorted_entries_.begin(), sorted_entries_.end(), [&](Index a, Index b) {
-    const auto ka = key_of_entry_[static_cast<std::size_t>(a)], kb = key_of_entry_[static_cast<std::size_t>(b)];
-    return ka != kb ? ka < kb : a < b;
-  });
+  for (std::size_t e = 0; e < entries; ++e) sorted_entries_[e] = key_entry_[e].second;
   slot_of_entry_.assign(entries, 0);
   slot_begin_.clear();
   slot_key_.clear();

@@ -50,6 +50,9 @@ class BackgroundGrid {
   std::vector<std::int64_t> key_of_entry_;
   std::vector<Index> slot_of_entry_;
   std::vector<Index> sorted_entries_;
+  std::vector<std::pair<std::int64_t, Index>> key_entry_;  // (cell key, entry), sorted
+  std::vector<std::pair<std::int64_t, Index>> kept_, moved_;  // scratch of locate()'s re-sort
+  std::vector<char> corner_moved_;                            // corner changed cell in this locate()
   std::vector<Index> slot_begin_{0};
   std::vector<std::int64_t> slot_key_;
 };
