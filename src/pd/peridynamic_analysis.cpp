@@ -350,9 +350,9 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   energy_external_ = 0;
   sink->output_point(0, 0.0, 0.0);
   const auto loop_start = Clock::now();
+  PointMatrix g_old = support_force();  // the end-of-step value of the previous step
   for (Index step = 1; step <= steps; ++step) {
     const Real t = static_cast<Real>(step) * dt;
-    const PointMatrix g_old = support_force();
     const Eigen::VectorXd u_old = u;
     // Stage 1: half-step velocity; Stage 2: positions; Stage 3: prescribed motion.
     for (Index d = 0; d < 3 * n; ++d)
@@ -372,6 +372,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     const PointMatrix g_new = support_force();
     const Eigen::Map<const Eigen::VectorXd> go(g_old.data(), 3 * n), gn(g_new.data(), 3 * n);
     energy_external_ += 0.5 * (go + gn).dot(u - u_old);
+    g_old = g_new;
     energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
     if (!std::isfinite(energy_kinetic_))
       throw AnalysisError(fmt::format("explicit dynamics: non-finite velocity at step {} (t = {:.4g})", step, t));
