@@ -50,6 +50,7 @@ void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, sh
   if (!section.defined() || !section.expect_map()) return;
   s.thickness_points = static_cast<int>(section.integer("thickness_points", 3, 1, 7));
   s.hourglass = section.real("hourglass", 0.1, 0.0, 1.0);
+  if (section.has("hourglass_bending")) s.hourglass_bending = section.real("hourglass_bending", std::nullopt, 0.0, 2.0);
   s.shear_factor = section.real("shear_factor", 5.0 / 6.0, 0.0, 1.0, true);
   s.warping_correction = section.boolean("warping_correction", true);
   section.reject_unknown_keys();

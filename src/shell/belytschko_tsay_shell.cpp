@@ -187,13 +187,14 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   ml.row(2).setZero();
 
   // hourglass resistance (eqs (30)-(36))
-  if (section_.hourglass > 0.0) {
+  if (section_.hourglass > 0.0 || section_.hourglass_bending > 0.0) {
     Row4 hv;
     hv << 1.0, -1.0, 1.0, -1.0;
     const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
     const Real bsq = b1.squaredNorm() + b2.squaredNorm();
     const Real E = material_.young_modulus(), G = material_.shear_modulus(), r = section_.hourglass;
-    const Real c_bend = r * E * h * h * h * area / 192.0 * bsq;
+    const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
+    const Real c_bend = r_bend * E * h * h * h * area / 192.0 * bsq;
     const Real c_w = r * k * G * h * h * h / 12.0 * bsq;
     const Real c_mem = r * E * h * area / 8.0 * bsq;
     const Real rates[kHourglassSize] = {gamma.dot(tx), gamma.dot(ty), gamma.dot(vz), gamma.dot(vx), gamma.dot(vy)};

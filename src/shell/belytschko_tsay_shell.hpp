@@ -8,7 +8,8 @@
 //   2d_xz = B1.vz + N.ty,   2d_yz = B2.vz - N.tx      (N_I = 1/4, B = dN/dx at the centre)
 // Resultants (eq (28)) over the Lobatto points (eq (29)); nodal forces and moments (eqs (25)-(26)) are
 // the power conjugates of the rates; hourglass resistance (eqs (30)-(36), Belytschko-Tsay 1983 with the
-// Flanagan-Belytschko gamma vectors); global forces f = Q^T f_hat (eq (37)).
+// Flanagan-Belytschko gamma vectors; the rotational modes may take their own coefficient,
+// ShellSection::hourglass_bending, whose value 1 is the physical stiffness); global forces f = Q^T f_hat (eq (37)).
 // Warping correction: a Belytschko-Wong-Chiang-type rigid-body projection (the in-plane velocities
 // of warped nodes lose the part produced by the element's rigid rotation about its in-plane axes,
 // and the transposed projection is applied to the forces), so a warped element under rigid rotation
@@ -33,6 +34,12 @@ struct ShellSection {
   int thickness_points = 3;          // Lobatto points through the thickness
   Real shear_factor = 5.0 / 6.0;     // transverse shear correction k
   Real hourglass = 0.1;              // hourglass coefficient r (membrane, bending and transverse)
+  /// Coefficient of the two rotational (bending) hourglass modes; negative = use `hourglass`.
+  /// About 1 is the physical value: on a square element the mode theta_y = c h_I (h = [1,-1,1,-1])
+  /// stores r (1 - nu^2) D c^2 with the stiffness r E h^3 A Bsq / 192, and the exactly integrated
+  /// bending energy of the same bilinear rotation field is (2/3)(1 + (1 - nu)/2) D c^2
+  /// (equal at r = 0.99 for nu = 0.3), as in Belytschko-Leviathan's physical stabilization.
+  Real hourglass_bending = -1.0;
   bool warping_correction = true;    // BWC-type rigid-body projection for warped elements
 };
 

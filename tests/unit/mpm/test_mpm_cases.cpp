@@ -1,6 +1,7 @@
 // `method: mpm` end to end through the lamina binary: bad shell meshes and a grid too coarse for the
 // elements are rejected with exit 2 and a clear message; a run made unstable stops with exit 3;
-// a small linear cantilever matches beam theory (issue 5 acceptance 5).
+// a small linear cantilever matches beam theory (issue 5 acceptance 5); shell.hourglass_bending is
+// read and range-checked.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -93,6 +94,21 @@ TEST(mpm_Cases, UnstableRunStopsWithExitThree) {
   const Outcome o = run_case("unstable", kStrip, "--set mpm.time_step.fixed=0.01");
   EXPECT_EQ(o.exit_code, 3) << o.output;
   EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
+}
+
+TEST(mpm_Cases, BendingHourglassCoefficientIsReadAndRangeChecked) {
+  // the cantilever stores no hourglass energy, so the physical bending coefficient leaves it unchanged
+  const Outcome ok = run_case("hg_bending", kStrip, "--set shell.hourglass_bending=1.0");
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  std::ifstream summary(fs::temp_directory_path() / "lamina_mpm_test_hg_bending" / "out" / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"w_tip\":");
+  ASSERT_NE(at, std::string::npos);
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  EXPECT_NEAR(std::stod(text.substr(at + 8)), exact, 0.01 * exact);
+  const Outcome bad = run_case("hg_bending_bad", kStrip, "--set shell.hourglass_bending=3.0");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("shell.hourglass_bending"), std::string::npos) << bad.output;
 }
 
 }  // namespace
