@@ -160,7 +160,12 @@ Model build_point_model_unlocated(const io::Case& c) {
     const bool plate = g.type == geometry::GeometryType::plate;
     const Vec3 lower = plate ? Vec3(g.min.x(), g.min.y(), -0.5 * g.thickness) : g.min;
     const Vec3 upper = plate ? Vec3(g.max.x(), g.max.y(), 0.5 * g.thickness) : g.max;
-    model.cloud = pd::lattice_point_cloud(pd::make_cell_lattice(lower, upper, *d.spacing), plate);
+    // pd.surface_correction: plate puts the layers of a plate lattice at the Gauss points of the thickness
+    bool gauss_layers = false;
+    if (plate && c.method == "pd" && c.method_section.IsMap() && c.method_section["surface_correction"] &&
+        c.method_section["surface_correction"].IsScalar())
+      gauss_layers = c.method_section["surface_correction"].Scalar() == "plate";
+    model.cloud = pd::lattice_point_cloud(pd::make_cell_lattice(lower, upper, *d.spacing), plate, gauss_layers);
   } else if (d.nodes) {
     model.cloud = geometry::generate_volume_nodes(c.geometry, *d.nodes);
   } else if (d.particles) {  // 2D particle methods (mpfem): one layer in the generator's third direction

@@ -78,9 +78,10 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
                                                       : pd::Kinematics::three_dimensional;
   o->body.influence = section.word("influence", {"one", "inverse_distance"}, "one") == "one" ? pd::Influence::one
                                                                                              : pd::Influence::inverse_distance;
-  o->body.surface_correction = section.word("surface_correction", {"energy", "none"}, "energy") == "energy"
-                                   ? pd::SurfaceCorrection::energy
-                                   : pd::SurfaceCorrection::none;
+  const std::string correction = section.word("surface_correction", {"energy", "none", "plate"}, "energy");
+  o->body.surface_correction = correction == "energy" ? pd::SurfaceCorrection::energy
+                               : correction == "plate" ? pd::SurfaceCorrection::plate
+                                                       : pd::SurfaceCorrection::none;
   o->body.partial_volume = section.boolean("partial_volume", false);
   io::NodeReader qs = section.child("quasi_static");
   if (qs.defined() && qs.expect_map()) {
@@ -91,9 +92,12 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
     r.switch_iteration = static_cast<int>(qs.integer("switch_iteration", 2000, 0, 1000000000));
     r.max_iterations = static_cast<int>(qs.integer("max_iterations", 20000, 1, 1000000000));
     r.max_cuts = static_cast<int>(qs.integer("max_cuts", 6, 0, 30));
+    r.continuations = static_cast<int>(qs.integer("continuations", 4, 0, 1000));
     r.density_factor = qs.real("density_factor", 1.0, 0.0, 1e6, true);
     r.velocity_guard = qs.real("velocity_guard", 1e-10, 0.0, 1.0);
     r.secant_predictor = qs.word("predictor", {"secant", "previous"}, "secant") == "secant";
+    r.linear_start = qs.word("start", {"interpolated", "linear"}, "interpolated") == "linear";
+    r.kinetic_fallback = qs.boolean("kinetic_fallback", true);
     qs.reject_unknown_keys();
   }
   io::NodeReader ex = section.child("explicit");

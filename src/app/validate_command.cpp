@@ -36,6 +36,7 @@ struct CheckSpec {
   std::optional<std::string> x, reference_x; // curve comparison: interpolate lamina's x->quantity at reference_x
   Real rel_tol = 0.0, abs_tol = 0.0;
   std::optional<Real> max;                   // upper bound instead of a reference
+  bool report_only = false;                  // shown next to its reference, not a pass mark
 };
 
 struct PlotSpec {
@@ -122,9 +123,11 @@ ValidationCase read_validation_case(const fs::path& directory) {
             check.rel_tol = c.real("rel_tol", 0.0, 0.0);
             check.abs_tol = c.real("abs_tol", 0.0, 0.0);
             if (c.has("max")) check.max = c.real("max", 0.0);
+            check.report_only = c.boolean("report_only", false);
             if (!check.max && !check.reference_value && check.reference_column.empty())
               c.error("a reference (column name or number) or a max bound");
-            if (!check.max && check.rel_tol == 0.0 && check.abs_tol == 0.0) c.error("rel_tol and/or abs_tol");
+            if (!check.max && !check.report_only && check.rel_tol == 0.0 && check.abs_tol == 0.0)
+              c.error("rel_tol and/or abs_tol (or report_only: true)");
             c.reject_unknown_keys();
             run.checks.push_back(check);
           }
@@ -195,6 +198,7 @@ struct CheckRow {
   Real lamina = NAN, reference = NAN, error = NAN, tolerance = NAN;
   std::string reference_text, error_kind;
   bool pass = false;
+  bool report_only = false;
   double seconds = 0;
   std::string note;
 };
@@ -398,6 +402,14 @@ int validate(const ValidateOptions& options) {
           else row.note = fmt::format("{} reference rows match", reference_rows.size());
           if (std::isnan(row.lamina)) row.note = "lamina has no probe '" + check.quantity + "'";
           row.pass = !std::isnan(row.reference) && within(row.lamina, row.reference, check, row.error, row.tolerance, row.error_kind);
+          if (check.report_only) {
+            // the relative difference is shown; the row never fails the run
+            row.error = row.reference != 0 ? std::abs(row.lamina - row.reference) / std::abs(row.reference) : NAN;
+            row.error_kind = "rel";
+            row.tolerance = NAN;
+            row.pass = true;
+            row.report_only = true;
+          }
         }
         if (row.reference_text.empty()) row.reference_text = number(row.reference);
         table.push_back(row);
@@ -442,7 +454,7 @@ int validate(const ValidateOptions& options) {
     all_pass = all_pass && r.pass;
     std::cout << fmt::format("{:<28} {:<18} {:<8} {:>13} {:>13} {:>10} {:>10} {:>5} {:>8.2f}{}\n", r.case_name, r.run_name,
                              r.quantity, number(r.lamina), r.reference_text, number(r.error), number(r.tolerance),
-                             r.pass ? "PASS" : "FAIL", r.seconds, r.note.empty() ? "" : "  (" + r.note + ")");
+                             r.report_only ? "INFO" : r.pass ? "PASS" : "FAIL", r.seconds, r.note.empty() ? "" : "  (" + r.note + ")");
   }
 
   // plots through matplotlib (Debian python3-matplotlib)
@@ -468,7 +480,10 @@ int validate(const ValidateOptions& options) {
   for (const auto& r : table)
     report << fmt::format("| {} | {} | {} | {} | {} | {} {} | {} | {} | {:.2f} |\n", r.case_name, r.run_name, r.quantity,
                           number(r.lamina), r.reference_text, number(r.error), r.error_kind, number(r.tolerance),
-                          r.pass ? "pass" : "**FAIL**" + (r.note.empty() ? std::string() : " (" + r.note + ")"), r.seconds);
+                          r.report_only ? std::string("reported (not a pass mark)")
+                          : r.pass      ? std::string("pass")
+                                        : "**FAIL**" + (r.note.empty() ? std::string() : " (" + r.note + ")"),
+                          r.seconds);
   report << "\n";
   for (const auto& v : cases) {
     report << fmt::format("## {}\n\n{}\n\n", v.name, descriptions[v.name]);

@@ -12,13 +12,16 @@ AdaptiveDynamicRelaxation::AdaptiveDynamicRelaxation(const LinearPeridynamicSoli
                                                      std::vector<char> free, AdaptiveDynamicRelaxationOptions options)
     : solid_(solid), lambda_(std::move(fictitious_density)), free_(std::move(free)), options_(options) {}
 
-RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMatrix& external_force) const {
+RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMatrix& external_force,
+                                                 Real reference_residual) const {
   const Index dofs = u.size();
   Eigen::Map<Eigen::VectorXd> U(u.data(), dofs);
   const Eigen::Map<const Eigen::VectorXd> fext(external_force.data(), dofs);
   Eigen::VectorXd velocity = Eigen::VectorXd::Zero(dofs), previous_force(dofs), residual(dofs);
   RelaxationResult result;
   const Real dt = 1.0;
+  Real previous_kinetic = 0;
+  bool restart = false;
   for (int k = 0;; ++k) {
     // Stage 1: internal force at U^k.
     solid_.bond_state(u, result.state);
@@ -33,7 +36,7 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
     }
     if (!std::isfinite(largest) || !std::isfinite(scale))
       throw AnalysisError(fmt::format("adaptive dynamic relaxation: non-finite residual at iteration {}", k));
-    if (k == 0) result.initial_residual = largest;
+    if (k == 0) result.initial_residual = reference_residual > 0 ? reference_residual : largest;
     result.residual = largest;
     result.iterations = k;
     const Real absolute = options_.absolute_tolerance >= 0 ? options_.absolute_tolerance : options_.tolerance * scale;
@@ -60,19 +63,30 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
       if (c > 2.0) c = 1.9;
     }
     // Stage 4: velocity update (start-up half step at k = 0, central difference otherwise).
-    Real dissipated = 0;
+    Real dissipated = 0, kinetic = 0;
     for (Index d = 0; d < dofs; ++d) {
       if (!free_[static_cast<std::size_t>(d)]) {
         velocity[d] = 0;
         continue;
       }
       const Real old_velocity = velocity[d];
-      velocity[d] = k == 0 ? 0.5 * dt * residual[d] / lambda_[d]
+      velocity[d] = k == 0 || restart ? 0.5 * dt * residual[d] / lambda_[d]
                            : ((2.0 - c * dt) * old_velocity + 2.0 * dt * residual[d] / lambda_[d]) / (2.0 + c * dt);
       const Real mean = 0.5 * (old_velocity + velocity[d]);
       dissipated += c * lambda_[d] * mean * mean * dt;
+      kinetic += lambda_[d] * velocity[d] * velocity[d];
     }
     result.damping_energy += dissipated;
+    // Kinetic-energy fallback: where the damping estimate is zero (negative local stiffness, e.g. a
+    // snap-through), the motion would stay undamped; stop it at each peak of the kinetic energy.
+    restart = false;
+    if (options_.kinetic_fallback && c == 0 && k > 0 && kinetic < previous_kinetic) {
+      result.damping_energy += 0.5 * kinetic;
+      velocity.setZero();
+      kinetic = 0;
+      restart = true;  // from rest: the next velocity is the start-up half step again
+    }
+    previous_kinetic = kinetic;
     // Stage 5: displacement update; remember F^k for the next local stiffness.
     U += dt * velocity;
     previous_force = fint;

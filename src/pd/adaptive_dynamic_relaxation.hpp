@@ -12,6 +12,8 @@
 //   converged (seed eq (8)): max|R^k| <= tol_rel max|R^0| for k < k_switch; afterwards that OR
 //   max|R^k| <= tol_abs. R = F_int + F_ext on the free degrees of freedom.
 // The energy dissipated by the fictitious damping, sum c lambda Udot^2 dt, is accumulated.
+// Extension (kinetic_fallback, default on): while c = 0 (negative local stiffness, e.g. during a
+// snap-through) the velocities are zeroed at every peak of the fictitious kinetic energy.
 #include <vector>
 
 #include "pd/linear_peridynamic_solid.hpp"
@@ -37,7 +39,10 @@ class AdaptiveDynamicRelaxation {
 
   /// Relax u (3 x N: prescribed values on constrained dofs, the start field elsewhere) to equilibrium
   /// under external_force (3 x N). Throws AnalysisError on non-finite values.
-  RelaxationResult relax(PointMatrix& u, const PointMatrix& external_force) const;
+  /// reference_residual > 0: the max|R^0| of the relative test (a continued relaxation keeps the
+  /// increment's own start residual instead of its current, dynamic one); the iteration budget is
+  /// max_iterations per call.
+  RelaxationResult relax(PointMatrix& u, const PointMatrix& external_force, Real reference_residual = -1.0) const;
 
  private:
   const LinearPeridynamicSolid& solid_;

@@ -17,7 +17,36 @@ CellLattice make_cell_lattice(const Vec3& lower, const Vec3& upper, const Vec3& 
   return lattice;
 }
 
-PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets) {
+void gauss_legendre(Index n, Eigen::VectorXd& points, Eigen::VectorXd& weights) {
+  points = Eigen::VectorXd::Zero(n);
+  weights = Eigen::VectorXd::Constant(n, 2.0);
+  if (n < 2) return;
+  const Real pi = 3.14159265358979323846;
+  auto legendre = [n](Real x, Real& derivative) {  // P_n(x) and P_n'(x) by the three-term recursion
+    Real p0 = 1, p1 = x;
+    for (Index k = 2; k <= n; ++k) {
+      const Real p2 = ((2 * static_cast<Real>(k) - 1) * x * p1 - (static_cast<Real>(k) - 1) * p0) / static_cast<Real>(k);
+      p0 = p1;
+      p1 = p2;
+    }
+    derivative = static_cast<Real>(n) * (x * p1 - p0) / (x * x - 1);
+    return p1;
+  };
+  for (Index i = 0; i < n; ++i) {
+    Real x = -std::cos(pi * (static_cast<Real>(i) + 0.75) / (static_cast<Real>(n) + 0.5));  // ascending guesses
+    Real derivative = 1;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      const Real step = legendre(x, derivative) / derivative;
+      x -= step;
+      if (std::abs(step) < 1e-16) break;
+    }
+    legendre(x, derivative);
+    points[i] = x;
+    weights[i] = 2 / ((1 - x * x) * derivative * derivative);
+  }
+}
+
+PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets, bool gauss_layers) {
   const auto [nx, ny, nz] = lattice.cells;
   const Index count = nx * ny * nz;
   PointCloud cloud;
@@ -31,6 +60,17 @@ PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets) {
     cloud.sets[low_names[d]] = {};
     cloud.sets[high_names[d]] = {};
   }
+  Eigen::VectorXd layer_z(nz), layer_weight = Eigen::VectorXd::Ones(nz);
+  for (Index k = 0; k < nz; ++k) layer_z[k] = lattice.lower.z() + (static_cast<Real>(k) + 0.5) * lattice.spacing.z();
+  if (gauss_layers) {
+    Eigen::VectorXd points, weights;
+    gauss_legendre(nz, points, weights);
+    const Real centre = 0.5 * (lattice.lower.z() + lattice.upper.z()), half = 0.5 * (lattice.upper.z() - lattice.lower.z());
+    for (Index k = 0; k < nz; ++k) {
+      layer_z[k] = centre + half * points[k];
+      layer_weight[k] = 0.5 * static_cast<Real>(nz) * weights[k];  // relative to the cell volume
+    }
+  }
   Index node = 0;
   for (Index k = 0; k < nz; ++k)
     for (Index j = 0; j < ny; ++j)
@@ -38,12 +78,15 @@ PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets) {
         const std::array<Index, 3> ijk{i, j, k};
         for (int d = 0; d < 3; ++d) {
           cloud.positions(d, node) =
-              lattice.lower[d] + (static_cast<Real>(ijk[static_cast<std::size_t>(d)]) + 0.5) * lattice.spacing[d];
+              d == 2 ? layer_z[k] : lattice.lower[d] + (static_cast<Real>(ijk[static_cast<std::size_t>(d)]) + 0.5) * lattice.spacing[d];
           if (ijk[static_cast<std::size_t>(d)] == 0) cloud.sets[low_names[d]].push_back(node);
           if (ijk[static_cast<std::size_t>(d)] == lattice.cells[static_cast<std::size_t>(d)] - 1)
             cloud.sets[high_names[d]].push_back(node);
         }
       }
+  if (gauss_layers)
+    for (Index k = 0, index = 0; k < nz; ++k)
+      for (Index j = 0; j < nx * ny; ++j, ++index) cloud.volumes[index] *= layer_weight[k];
   if (plate_sets) {
     cloud.sets["top"] = cloud.sets["zmax"];
     cloud.sets["bottom"] = cloud.sets["zmin"];

@@ -25,6 +25,13 @@ struct CellLattice {
 CellLattice make_cell_lattice(const Vec3& lower, const Vec3& upper, const Vec3& requested_spacing);
 
 /// Nodes at the cell centres (x fastest, then y, then z), volumes, spacing and named sets.
-PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets);
+/// gauss_layers (plates, surface_correction: plate): the nz node layers sit at the nz-point
+/// Gauss-Legendre points of [lower.z, upper.z] and carry the Gauss weights as volumes
+/// (dx dy w_k (zmax - zmin) / 2), so layer sums integrate through-thickness polynomials up to degree
+/// 2 nz - 1 exactly (bending stiffness sum V_k z_k^2 = t^3 / 12 per unit area from 2 layers on).
+PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets, bool gauss_layers = false);
+
+/// n-point Gauss-Legendre rule on [-1, 1]: points (ascending) and weights.
+void gauss_legendre(Index n, Eigen::VectorXd& points, Eigen::VectorXd& weights);
 
 }  // namespace lamina::pd

@@ -8,7 +8,7 @@
 namespace lamina::pd {
 
 LinearPeridynamicSolid::LinearPeridynamicSolid(const PeridynamicBody& body) : body_(body) {
-  reverse_weight_.resize(3, body.bonds());
+  reverse_weight_.resize(6, body.bonds());
   reverse_modulus_.resize(body.bonds());
 #pragma omp parallel for schedule(static)
   for (Index b = 0; b < body.bonds(); ++b) {
@@ -33,16 +33,18 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
   s.length.resize(body.bonds());
   s.extension.resize(body.bonds());
   s.dilatation.resize(3, n);
-  s.dilatation_force.resize(3, n);
+  s.shear_dilatation.resize(3, n);
+  s.dilatation_force.resize(6, n);
   s.pair_force.resize(body.bonds());
   const auto& x0 = body.bond_length();
   const auto& w = body.dilatation_weight();
   const auto& c = body.bond_modulus();
   const auto& bv = body.bond_volume();
+  const bool shear = body.options().surface_correction == SurfaceCorrection::plate;  // rows 3-5 of w in use
   // Stage 1: extensions and dilatation (gather over each node's bonds).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
-    Eigen::Vector3d theta = Eigen::Vector3d::Zero();
+    Vec6 theta = Vec6::Zero();
     const Vec3 pi = body.positions().col(i), ui = u.col(i);
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
       const Index j = body.neighbour(b);
@@ -68,18 +70,29 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
       s.direction.col(b) = m;
       s.length[b] = y;
       s.extension[b] = e;
-      theta += w.col(b) * (e * bv[b]);
+      if (shear)
+        theta += w.col(b) * (e * bv[b]);
+      else
+        theta.head<3>() += w.col(b).head<3>() * (e * bv[b]);
     }
-    s.dilatation.col(i) = theta;
-    s.dilatation_force.col(i) = body.dilatation_coupling(i) * theta;
+    s.dilatation.col(i) = theta.head<3>();
+    s.shear_dilatation.col(i) = theta.tail<3>();
+    if (shear)
+      s.dilatation_force.col(i) = body.dilatation_coupling(i) * theta;
+    else
+      s.dilatation_force.col(i) << body.dilatation_coupling(i).topLeftCorner<3, 3>() * theta.head<3>(), Vec3::Zero();
   }
   // Stage 2: pair forces P_ij = V_i beta V_j (t_ij + t_ji).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
       const Index j = body.neighbour(b);
-      const Real tij = s.dilatation_force.col(i).dot(w.col(b)) + c[b] * s.extension[b];
-      const Real tji = s.dilatation_force.col(j).dot(reverse_weight_.col(b)) + reverse_modulus_[b] * s.extension[b];
+      const Real tij = (shear ? s.dilatation_force.col(i).dot(w.col(b))
+                              : s.dilatation_force.col(i).head<3>().dot(w.col(b).head<3>())) +
+                       c[b] * s.extension[b];
+      const Real tji = (shear ? s.dilatation_force.col(j).dot(reverse_weight_.col(b))
+                              : s.dilatation_force.col(j).head<3>().dot(reverse_weight_.col(b).head<3>())) +
+                       reverse_modulus_[b] * s.extension[b];
       s.pair_force[b] = body.volumes()[i] * bv[b] * (tij + tji);
     }
   }
@@ -105,7 +118,9 @@ Eigen::VectorXd LinearPeridynamicSolid::energy_density(const BondState& s) const
     Real bond = 0;
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b)
       bond += body.bond_modulus()[b] * s.extension[b] * s.extension[b] * body.bond_volume()[b];
-    w[i] = 0.5 * s.dilatation.col(i).dot(s.dilatation_force.col(i)) + 0.5 * bond;
+    w[i] = 0.5 * (s.dilatation.col(i).dot(s.dilatation_force.col(i).head<3>()) +
+                  s.shear_dilatation.col(i).dot(s.dilatation_force.col(i).tail<3>())) +
+           0.5 * bond;
   }
   return w;
 }
@@ -121,18 +136,20 @@ solve::SparseMatrix LinearPeridynamicSolid::stiffness(const BondState& s, bool m
   const auto& c = body.bond_modulus();
   const auto& bv = body.bond_volume();
   const auto& vol = body.volumes();
+  const bool shear = body.options().surface_correction == SurfaceCorrection::plate;
   // grad theta_a,i (3 x D per node pair): self part -sum_j w^a beta V_j M_ij; neighbour part w^a_ij beta V_j M_ij.
-  std::vector<Mat3> self(static_cast<std::size_t>(n));
+  using Mat36 = Eigen::Matrix<Real, 3, 6>;
+  std::vector<Mat36> self(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
-    Mat3 sum = Mat3::Zero();
+    Mat36 sum = Mat36::Zero();
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b)
       sum += (bv[b] * s.direction.col(b)) * w.col(b).transpose();
     self[static_cast<std::size_t>(i)] = -sum;
   }
-  auto gradient = [&](Index i, Index b_or_self) -> Mat3 {  // b_or_self < 0: the node itself
+  auto gradient = [&](Index i, Index b_or_self) -> Mat36 {  // b_or_self < 0: the node itself
     if (b_or_self < 0) return self[static_cast<std::size_t>(i)];
-    return Mat3((bv[b_or_self] * s.direction.col(b_or_self)) * w.col(b_or_self).transpose());
+    return Mat36((bv[b_or_self] * s.direction.col(b_or_self)) * w.col(b_or_self).transpose());
   };
   // Pass 1: the blocks of each column node J (nodes K <= J within two families).
   std::vector<std::vector<Index>> rows(static_cast<std::size_t>(n));
@@ -190,11 +207,21 @@ solve::SparseMatrix LinearPeridynamicSolid::stiffness(const BondState& s, bool m
     }
     // Dilatation terms: every node i whose theta depends on u_J (i = J or J in family(i)).
     if (material) {
-      auto add_dilatation = [&](Index i, const Mat3& gJ) {
-        const Mat3 qg = vol[i] * body.dilatation_coupling(i) * gJ.transpose();
-        if (Mat3* ki = block(i)) *ki += gradient(i, -1) * qg;
-        for (Index bb = body.first_bond(i); bb < body.end_bond(i); ++bb)
-          if (Mat3* kk = block(body.neighbour(bb))) *kk += gradient(i, bb) * qg;
+      // gradient(i, bb) qg = (beta V M)(w^T qg): an outer product; without shear dilatations (every
+      // correction but plate) only the normal 3 x 3 part of Q and w is non-zero
+      auto add_dilatation = [&](Index i, const Mat36& gJ) {
+        if (shear) {
+          const Eigen::Matrix<Real, 6, 3> qg = vol[i] * body.dilatation_coupling(i) * gJ.transpose();
+          if (Mat3* ki = block(i)) *ki += gradient(i, -1) * qg;
+          for (Index bb = body.first_bond(i); bb < body.end_bond(i); ++bb)
+            if (Mat3* kk = block(body.neighbour(bb))) *kk += (bv[bb] * s.direction.col(bb)) * (w.col(bb).transpose() * qg);
+        } else {
+          const Mat3 qg = vol[i] * body.dilatation_coupling(i).topLeftCorner<3, 3>() * gJ.leftCols<3>().transpose();
+          if (Mat3* ki = block(i)) *ki += self[static_cast<std::size_t>(i)].leftCols<3>() * qg;
+          for (Index bb = body.first_bond(i); bb < body.end_bond(i); ++bb)
+            if (Mat3* kk = block(body.neighbour(bb)))
+              *kk += (bv[bb] * s.direction.col(bb)) * (w.col(bb).head<3>().transpose() * qg);
+        }
       };
       add_dilatation(J, gradient(J, -1));
       for (Index b = body.first_bond(J); b < body.end_bond(J); ++b) {

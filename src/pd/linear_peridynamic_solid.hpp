@@ -3,7 +3,7 @@
 // solid with geometrically exact kinematics (seed 002 eqs (1)-(4); Silling 2007 eq (93)).
 //
 //   e_ij = |Y_ij| - |xi_ij|, M_ij = Y_ij / |Y_ij|            (deformed length and direction)
-//   theta_i,a = sum_j w^a_ij e_ij beta V_j,   t_ij = (Q_i theta_i) . w_ij + c_ij e_ij
+//   theta_i,a = sum_j w^a_ij e_ij beta V_j (a < 6: three normal, three shear - plate correction only),   t_ij = (Q_i theta_i) . w_ij + c_ij e_ij
 //   F_i = sum_j P_ij M_ij,   P_ij = V_i beta V_j (t_ij + t_ji)  (nodal force, N)
 //   Pi  = sum_i V_i (1/2 theta_i^T Q_i theta_i + 1/2 sum_j c_ij e_ij^2 beta V_j)
 // Stiffness (seed 002 section 2.2, Silling 2010 modulus state): K = d^2 Pi / dU^2 =
@@ -21,8 +21,9 @@ struct BondState {
   Eigen::Matrix3Xd direction;     // M per directed bond
   Eigen::VectorXd length;         // |Y|
   Eigen::VectorXd extension;      // e
-  Eigen::Matrix3Xd dilatation;        // theta_a per node (zero padded to 3 rows)
-  Eigen::Matrix3Xd dilatation_force;  // Q theta per node
+  Eigen::Matrix3Xd dilatation;        // normal generalized dilatations theta_a per node (zero padded to 3 rows)
+  Eigen::Matrix3Xd shear_dilatation;  // theta_yz, theta_xz, theta_xy (surface_correction: plate; else zero)
+  Matrix6X dilatation_force;          // Q theta per node (6 rows)
   Eigen::VectorXd pair_force;     // P per directed bond (equal for b and reverse(b))
 };
 
@@ -55,7 +56,7 @@ class LinearPeridynamicSolid {
  private:
   const PeridynamicBody& body_;
   // w and c of the reverse bond j->i stored at bond i->j, so the pair-force pass reads them in order
-  Eigen::Matrix3Xd reverse_weight_;
+  Matrix6X reverse_weight_;
   Eigen::VectorXd reverse_modulus_;
 };
 

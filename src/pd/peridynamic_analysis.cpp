@@ -1,5 +1,6 @@
 #include "pd/peridynamic_analysis.hpp"
 
+
 #include <fmt/format.h>
 
 #include <Spectra/MatOp/SparseCholesky.h>
@@ -10,6 +11,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "pd/load_path_events.hpp"
 
 namespace lamina::pd {
 
@@ -90,6 +92,7 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
     buckling_modes(imperfection.mode);
     positions += scaled(modes_[static_cast<std::size_t>(imperfection.mode - 1)]);
     build_body(positions);
+    imperfection_load_factor_ = eigenvalues_.front();
     eigenvalues_.clear();
     modes_.clear();
   }
@@ -199,7 +202,18 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
   const Index n = body_->nodes();
   const auto& options = problem_.relaxation;
   // Fictitious density from the reference stiffness (seed 002 eq (5)).
-  const solve::SparseMatrix k0 = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
+  solve::SparseMatrix k0;
+  // Start field of the first increment: the linear solution (start: linear; a predictor only - the
+  // relaxation decides the answer) or the interpolated prescribed values.
+  PointMatrix linear_start;
+  if (options.linear_start) {
+    try {
+      linear_start = linear_solution(k0);
+    } catch (const AnalysisError&) {
+      linear_start.resize(0, 0);  // singular reference stiffness: fall back to the interpolated start
+    }
+  }
+  if (k0.rows() == 0) k0 = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
   Eigen::VectorXd lambda = 0.25 * options.density_factor * LinearPeridynamicSolid::absolute_row_sums(k0);
   const std::vector<char> free = free_dofs(true);
   for (Index d = 0; d < lambda.size(); ++d)
@@ -242,11 +256,32 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
   energy_damping_ = 0;
   energy_external_ = 0;
   PointMatrix generalized_force = PointMatrix::Zero(3, n);  // F_ext on free dofs, support force on prescribed ones
+  // Load path P(Delta) along the reference pattern g (the load at factor 1 or, displacement-controlled,
+  // the prescribed field at factor 1): P = (F_generalized . g) / (g . g) G with G = |sum_i g_i| (the
+  // total force of the pattern; half its absolute sum when it is self-equilibrated), Delta = g . u / G
+  // (the mean displacement of the loaded nodes, or the shortening between two loaded ends), P Delta =
+  // work; its stiffness changes are the buckling events.
+  PointMatrix path_direction = external_force(1.0);
+  for (Index d = 0; d < path_direction.size(); ++d)
+    if (!free[static_cast<std::size_t>(d)]) path_direction.data()[d] = 0;
+  if (path_direction.norm() == 0) {
+    path_direction.setZero();
+    apply_prescribed(path_direction, 1.0, false);
+  }
+  // a self-equilibrated pattern (equal and opposite end loads) transmits half its absolute sum
+  path_total_ = path_direction.rowwise().sum().norm();
+  const Real absolute_sum = path_direction.colwise().norm().sum();
+  if (!(path_total_ > 1e-9 * absolute_sum)) path_total_ = 0.5 * absolute_sum;
+  const Real path_norm2 = path_direction.squaredNorm();
+  path_load_.assign(1, 0.0);
+  path_displacement_.assign(1, 0.0);
+  total_iterations_ = 0;
   while (factor < 1.0 - 1e-12) {
     const Real target = std::min(1.0, factor + step);
     // Stage 1: start field of the increment.
     PointMatrix u;
-    if (factor == 0.0) u = interpolated_start(target);
+    if (factor == 0.0 && linear_start.size()) u = linear_start * target;
+    else if (factor == 0.0) u = interpolated_start(target);
     else if (options.secant_predictor && have_two)
       u = previous + (target - factor) / (factor - previous_factor) * (previous - before_previous);
     else if (options.secant_predictor) u = previous * (target / factor);
@@ -255,6 +290,18 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     // Stage 2: relax to equilibrium.
     const PointMatrix fext = external_force(target);
     RelaxationResult result = relaxation.relax(u, fext);
+    total_iterations_ += result.iterations;
+    // A snap-through under load control needs the fictitious dynamics to run on to the next stable
+    // state: keep relaxing from where the block stopped (relative test against the increment's own
+    // start residual) before giving the increment up.
+    for (int block = 0; !result.converged && block < options.continuations && std::isfinite(result.residual); ++block) {
+      const Real start = result.initial_residual, dissipated = result.damping_energy;
+      const int used = result.iterations;
+      result = relaxation.relax(u, fext, start);
+      total_iterations_ += result.iterations;
+      result.iterations += used;
+      result.damping_energy += dissipated;
+    }
     if (!result.converged) {
       if (++cuts > options.max_cuts)
         throw AnalysisError(fmt::format(
@@ -285,6 +332,9 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     last_iterations_ = result.iterations;
     last_residual_ = result.residual;
     increment_iterations_.push_back(result.iterations);
+    path_load_.push_back(path_norm2 > 0 ? path_direction.cwiseProduct(new_generalized).sum() / path_norm2 * path_total_ : 0.0);
+    path_displacement_.push_back(path_total_ > 0 ? path_direction.cwiseProduct(u).sum() / path_total_ : 0.0);
+    cuts = 0;
     steps_ = increment;
     sink->output_point(increment, factor, factor);
     sink->progress(factor, fmt::format("increment {} load factor {:.4f} iterations {}", increment, factor, result.iterations));
@@ -547,8 +597,34 @@ Real PeridynamicAnalysis::probe(const Probe& p) const {
 
 std::map<std::string, Real> PeridynamicAnalysis::builtin_probes() const {
   switch (problem_.analysis) {
-    case PdAnalysisKind::quasi_static:
-      return {{"iterations", static_cast<Real>(last_iterations_)}, {"residual", last_residual_}, {"damping_energy", energy_damping_}};
+    case PdAnalysisKind::quasi_static: {
+      std::map<std::string, Real> values{{"iterations", static_cast<Real>(last_iterations_)},
+                                         {"total_iterations", static_cast<Real>(total_iterations_)},
+                                         {"residual", last_residual_},
+                                         {"damping_energy", energy_damping_},
+                                         {"path_load", path_load_.empty() ? 0.0 : path_load_.back()},
+                                         {"path_displacement", path_displacement_.empty() ? 0.0 : path_displacement_.back()}};
+      Real ratio = 1.0;
+      const std::size_t m = path_load_.size();
+      if (m >= 3) {
+        const Real k0 = (path_load_[1] - path_load_[0]) / (path_displacement_[1] - path_displacement_[0]);
+        const Real k = (path_load_[m - 1] - path_load_[m - 2]) / (path_displacement_[m - 1] - path_displacement_[m - 2]);
+        ratio = k / k0;
+      }
+      values["tangent_stiffness_ratio"] = std::isfinite(ratio) ? ratio : 0.0;
+      const auto events = detect_stiffness_changes(path_load_, path_displacement_);
+      values["stiffness_changes"] = static_cast<Real>(events.size());
+      // the linear buckling load of the case's loads (imperfection: buckling_mode), and the first
+      // stiffness change relative to it
+      const Real linear = imperfection_load_factor_ * path_total_;
+      values["linear_buckling_load"] = linear;
+      values["first_buckling_ratio"] = linear > 0 && !events.empty() ? events[0].load / linear : 0.0;
+      for (std::size_t k = 0; k < 3; ++k) {
+        values[fmt::format("stiffness_change_{}_load", k + 1)] = k < events.size() ? events[k].load : 0.0;
+        values[fmt::format("stiffness_change_{}_ratio", k + 1)] = k < events.size() ? events[k].stiffness_ratio : 0.0;
+      }
+      return values;
+    }
     case PdAnalysisKind::explicit_dynamics:
       return {{"kinetic_energy", energy_kinetic_},
               {"strain_energy", energy_internal_},

@@ -10,7 +10,10 @@
 //   material; reaction_force x|y|z|magnitude: sum over the selected nodes of -(F_int + F_ext)
 //   (the support forces at prescribed dofs); energy internal|kinetic|external|total|damping;
 //   eigenvalue k (buckling: the k-th load factor of the reference load).
-//   Builtin probes (history.csv): quasi_static: iterations, residual, damping_energy;
+//   Builtin probes (history.csv): quasi_static: iterations, total_iterations, residual, damping_energy,
+//   path_load, path_displacement (P and Delta along the unit reference load), tangent_stiffness_ratio,
+//   stiffness_changes and stiffness_change_k_load / _ratio (k <= 3; pd/load_path_events.hpp),
+//   linear_buckling_load and first_buckling_ratio (imperfection: buckling_mode);
 //   explicit: kinetic_energy, strain_energy, external_work, energy_error; buckling: load_factor_k.
 #include <map>
 #include <memory>
@@ -54,6 +57,9 @@ class PeridynamicAnalysis : public Analysis {
   Real damping_energy() const { return energy_damping_; }
   /// Per-increment ADR iteration counts (quasi_static).
   const std::vector<int>& increment_iterations() const { return increment_iterations_; }
+  /// Load path P(Delta) of a quasi_static run (first entry: the unloaded state).
+  const std::vector<Real>& path_load() const { return path_load_; }
+  const std::vector<Real>& path_displacement() const { return path_displacement_; }
 
  private:
   void build_body(const PointMatrix& positions);
@@ -81,6 +87,10 @@ class PeridynamicAnalysis : public Analysis {
   std::vector<Real> eigenvalues_;
   std::vector<PointMatrix> modes_;
   std::vector<int> increment_iterations_;
+  std::vector<Real> path_load_, path_displacement_;  // quasi_static: P and Delta per converged increment (0 first)
+  long long total_iterations_ = 0;                   // quasi_static: all ADR iterations, failed attempts included
+  Real path_total_ = 0;                              // |sum of the reference pattern| (total reference load)
+  Real imperfection_load_factor_ = 0;                // first buckling load factor (imperfection: buckling_mode)
   Real energy_internal_ = 0, energy_kinetic_ = 0, energy_external_ = 0, energy_damping_ = 0;
   Real last_residual_ = 0, energy_error_ = 0;
   int last_iterations_ = 0;

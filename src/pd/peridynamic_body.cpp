@@ -238,11 +238,15 @@ FamilyFit fit_family(const Eigen::MatrixXd& moment, const Eigen::MatrixXd& gram,
 void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::VectorXd& poisson) {
   young_ = young;
   poisson_ = poisson;
+  if (options_.surface_correction == SurfaceCorrection::plate) {
+    calibrate_plate();
+    return;
+  }
   const Index n = nodes();
   const int dim = dimension();
   const int monomials = dim * (dim + 1) / 2;
-  weight_ = Eigen::Matrix3Xd::Zero(3, bonds());
-  coupling_.assign(static_cast<std::size_t>(n), Mat3::Zero());
+  weight_ = Matrix6X::Zero(6, bonds());
+  coupling_.assign(static_cast<std::size_t>(n), Mat6::Zero());
   modulus_.resize(bonds());
   kappa_.resize(n);
   const Real delta = options_.horizon;
@@ -336,12 +340,203 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
       Real theta = 0;
       for (Index b = first_bond(i); b < end_bond(i); ++b) {
         const Vec3 nv = direction(i, b);
-        theta += weight_.col(b).sum() * length_[b] * nv[a] * nv[a] * bond_volume_[b];
+        theta += weight_.col(b).head<3>().sum() * length_[b] * nv[a] * nv[a] * bond_volume_[b];
       }
       max_dilatation_error = std::max(max_dilatation_error, std::abs(theta - 1.0));
     }
   }
   statistics_.max_dilatation_error = max_dilatation_error;
+  const Real mean = modulus_.size() ? modulus_.mean() : 1.0;
+  statistics_.min_bond_modulus_ratio = modulus_.size() ? modulus_.minCoeff() / mean : 1.0;
+}
+
+namespace {
+
+/// Tensor-Voigt quadratic monomials of a bond direction: n^T eps n = phi2(n) . (xx, yy, zz, yz, xz, xy).
+Vec6 quadratic_monomials(const Vec3& n) {
+  Vec6 p;
+  p << n.x() * n.x(), n.y() * n.y(), n.z() * n.z(), 2 * n.y() * n.z(), 2 * n.x() * n.z(), 2 * n.x() * n.y();
+  return p;
+}
+
+constexpr Real kPlateInPlaneFraction = 0.5;  // share of the in-plane shear modulus on same-layer bonds
+constexpr Real kPlateThicknessFraction = 0.5;  // share of E (eps_zz) on the vertical bonds
+constexpr Real kPlateCrossFraction = 0.1;  // share of the in-plane normal modulus on all cross-layer bonds
+
+struct PlateFit {
+  Eigen::MatrixXd w;   // bonds x 6: dilatation weights
+  Eigen::VectorXd c;   // bond moduli
+  Mat6 q;              // dilatation coupling
+  Real exactness_error = 0, gradient_residual = 0;
+};
+
+/// surface_correction: plate for one family (bond vectors xi, bond volumes beta V, influence omega).
+/// Weights w = sqrt(s) v with s = omega |xi|^2 beta V: v = the minimum-norm solution of the six
+/// exactness conditions sum_b w_b |xi| beta V phi2(n) = e_a plus the null-space correction that
+/// minimises the response to the 18 linear strain gradients, sum_b w_b |xi| beta V phi2(n) xi_k / 2.
+PlateFit fit_plate_family(const std::vector<Vec3>& xi, const std::vector<Real>& volume, const std::vector<Real>& omega,
+                          Real e, Real nu, Real delta) {
+  const Index m = static_cast<Index>(xi.size());
+  const Real mu = e / (2 * (1 + nu));
+  Eigen::MatrixXd exact(6, m), gradient(54, m);
+  Eigen::VectorXd root(m), s(m);
+  std::vector<Vec6> phi(static_cast<std::size_t>(m));
+  for (Index b = 0; b < m; ++b) {
+    const Real length = xi[static_cast<std::size_t>(b)].norm();
+    const Vec3 n = xi[static_cast<std::size_t>(b)] / length;
+    const Vec6 p = quadratic_monomials(n);
+    phi[static_cast<std::size_t>(b)] = p;
+    s[b] = omega[static_cast<std::size_t>(b)] * length * length * volume[static_cast<std::size_t>(b)];
+    root[b] = std::sqrt(s[b]);
+    const Vec6 column = length * volume[static_cast<std::size_t>(b)] * root[b] * p;
+    exact.col(b) = column;
+    const Vec3& x = xi[static_cast<std::size_t>(b)];
+    for (int k = 0; k < 3; ++k) gradient.col(b).segment<6>(6 * k) = column * (0.5 * x[k] / delta);
+    // second strain gradients: e / |xi| = n^T (eps + xi.grad eps / 2 + xi xi : grad grad eps / 6) n; the
+    // mixed ones (d/dz d/dx of the bending strain z kappa(x)) would otherwise read as transverse shear
+    int row = 18;
+    for (int k = 0; k < 3; ++k)
+      for (int l = k; l < 3; ++l, row += 6) gradient.col(b).segment<6>(row) = column * (x[k] * x[l] / (6 * delta * delta));
+  }
+  PlateFit fit;
+  fit.w = Eigen::MatrixXd::Zero(m, 6);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(exact, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  Index rank = 0;
+  while (rank < sigma.size() && sigma[rank] > 1e-10 * sigma[0]) ++rank;
+  const Eigen::MatrixXd null = svd.matrixV().rightCols(m - rank);
+  const Eigen::MatrixXd gn = gradient * null;
+  Eigen::MatrixXd h = gn.transpose() * gn;
+  const Real regular = 1e-10 * (h.trace() / std::max<Index>(h.rows(), 1) + 1e-300);
+  h.diagonal().array() += regular;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
+  for (int a = 0; a < 6; ++a) {
+    const Eigen::VectorXd ua = svd.matrixU().transpose().col(a);
+    Eigen::VectorXd v0 = Eigen::VectorXd::Zero(m);
+    for (Index r = 0; r < rank; ++r) v0 += svd.matrixV().col(r) * (ua[r] / sigma[r]);
+    Eigen::VectorXd v = v0;
+    if (null.cols() > 0) v -= null * ldlt.solve(gn.transpose() * (gradient * v0));
+    fit.w.col(a) = root.cwiseProduct(v);
+    fit.gradient_residual = std::max(fit.gradient_residual, (gradient * v).cwiseAbs().maxCoeff());
+  }
+  // exactness check (components the family cannot sense, rank < 6, stay zero)
+  {
+    Eigen::MatrixXd response = exact * root.cwiseInverse().asDiagonal() * fit.w;  // 6 x 6: theta_a of unit strain c
+    for (Index r = 0; r < 6; ++r) {
+      const Real target = rank == 6 ? 1.0 : response(r, r) > 0.5 ? 1.0 : 0.0;
+      response(r, r) -= target;
+    }
+    fit.exactness_error = response.cwiseAbs().maxCoeff();
+  }
+  const Real c11 = e / (1 - nu * nu), c12 = nu * e / (1 - nu * nu);
+  // Bond moduli: same-layer bonds isotropic (half the in-plane shear); the vertical bonds half of E for
+  // eps_zz (n_z^4 over all cross-layer bonds if the family has no vertical bond); every cross-layer bond a
+  // small isotropic part (kPlateCrossFraction). The dilatation coupling completes the plane-stress law.
+  // Cross-layer bonds see the strain at their mid-height in bending, not at the node's, so their
+  // in-plane share is what the bending stiffness of a two-layer lattice lacks (about that fraction).
+  Real same_shear = 0, same_normal = 0, cross_normal = 0, vertical_normal = 0, cross_in_plane = 0;
+  std::vector<bool> same(static_cast<std::size_t>(m));
+  for (Index b = 0; b < m; ++b) {
+    const Vec6& p = phi[static_cast<std::size_t>(b)];
+    same[static_cast<std::size_t>(b)] = std::abs(p[2]) <= 1e-18;
+    if (same[static_cast<std::size_t>(b)]) {
+      same_shear += s[b] * p[5] * p[5];
+      same_normal += s[b] * p[0] * p[0];
+    } else {
+      cross_normal += s[b] * std::pow(p[2], 4);
+      cross_in_plane += s[b] * (p[0] * p[0] + p[1] * p[1]) / 2;
+      if (p[2] >= 1 - 1e-12) vertical_normal += s[b];
+    }
+  }
+  const bool vertical_only = vertical_normal > 0;
+  if (vertical_only) cross_normal = vertical_normal;
+  const Real in_plane = same_shear > 0   ? kPlateInPlaneFraction * 4 * mu / same_shear
+                        : same_normal > 0 ? kPlateInPlaneFraction * c11 / same_normal
+                                          : 0.0;
+  const Real thickness = cross_normal > 0 ? kPlateThicknessFraction * e / cross_normal : 0.0;
+  // all cross-layer bonds: 10 % of the in-plane normal modulus, against the zig-zag w mode (w alternating
+  // from node to node, the same on every layer) that no same-layer bond and no strain estimate sees
+  const Real cross = cross_in_plane > 0 ? kPlateCrossFraction * c11 / cross_in_plane : 0.0;
+  fit.c.resize(m);
+  Mat6 bond = Mat6::Zero();
+  for (Index b = 0; b < m; ++b) {
+    const Vec6& p = phi[static_cast<std::size_t>(b)];
+    const Real thickness_part = (vertical_only ? (p[2] >= 1 - 1e-12 ? thickness : 0.0) : thickness * p[2] * p[2]) + cross;
+    const Real c = omega[static_cast<std::size_t>(b)] * (same[static_cast<std::size_t>(b)] ? in_plane : thickness_part);
+    fit.c[b] = c;
+    bond += (c * s[b] / omega[static_cast<std::size_t>(b)]) * p * p.transpose();
+  }
+  Mat6 target = Mat6::Zero();
+  target(0, 0) = target(1, 1) = c11;
+  target(0, 1) = target(1, 0) = c12;
+  target(2, 2) = e;
+  for (int k = 3; k < 6; ++k) target(k, k) = 4 * mu;
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(Mat6(target - bond));
+  fit.q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+  return fit;
+}
+
+}  // namespace
+
+void PeridynamicBody::calibrate_plate() {
+  if (dimension() != 3)
+    throw InputError("pd.surface_correction", "plate with kinematics: three_dimensional (a plate lattice)", "plane kinematics");
+  const Index n = nodes();
+  weight_ = Matrix6X::Zero(6, bonds());
+  coupling_.assign(static_cast<std::size_t>(n), Mat6::Zero());
+  modulus_.resize(bonds());
+  kappa_.resize(n);
+  const Real delta = options_.horizon;
+  const Real volume_scale = volumes_.size() ? volumes_.cwiseAbs().maxCoeff() : 1.0;
+  auto omega = [&](Index b) { return options_.influence == Influence::one ? 1.0 : delta / length_[b]; };
+  // Families with the same bond sequence (offsets, volumes) and material share one fit.
+  std::map<std::vector<std::int64_t>, Index> kinds;
+  std::vector<Index> kind(static_cast<std::size_t>(n)), representative;
+  for (Index i = 0; i < n; ++i) {
+    std::vector<std::int64_t> key{std::llround(young_[i] * 1e6), std::llround(poisson_[i] * 1e12)};
+    key.reserve(static_cast<std::size_t>(4 * (end_bond(i) - first_bond(i)) + 2));
+    for (Index b = first_bond(i); b < end_bond(i); ++b) {
+      const Vec3 xi = positions_.col(neighbour(b)) - positions_.col(i);
+      for (int d = 0; d < 3; ++d) key.push_back(std::llround(xi[d] / delta * 1e9));
+      key.push_back(std::llround(bond_volume_[b] / volume_scale * 1e9));
+    }
+    auto [it, inserted] = kinds.emplace(std::move(key), static_cast<Index>(representative.size()));
+    if (inserted) representative.push_back(i);
+    kind[static_cast<std::size_t>(i)] = it->second;
+  }
+  std::vector<PlateFit> fits(representative.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t k = 0; k < representative.size(); ++k) {
+    const Index i = representative[k];
+    std::vector<Vec3> xi;
+    std::vector<Real> volume, influence;
+    for (Index b = first_bond(i); b < end_bond(i); ++b) {
+      xi.push_back(positions_.col(neighbour(b)) - positions_.col(i));
+      volume.push_back(bond_volume_[b]);
+      influence.push_back(omega(b));
+    }
+    fits[k] = fit_plate_family(xi, volume, influence, young_[i], poisson_[i], delta);
+  }
+  statistics_.family_kinds = static_cast<Real>(representative.size());
+  Real exactness = 0, residual = 0;
+  for (const PlateFit& fit : fits) {
+    exactness = std::max(exactness, fit.exactness_error);
+    residual = std::max(residual, fit.gradient_residual);
+  }
+  statistics_.max_dilatation_error = exactness;
+  statistics_.max_gradient_residual = residual;
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < n; ++i) {
+    const PlateFit& fit = fits[static_cast<std::size_t>(kind[static_cast<std::size_t>(i)])];
+    const Real mu = young_[i] / (2 * (1 + poisson_[i]));
+    kappa_[i] = classical_stiffness(i)(0, 1) - mu;
+    coupling_[static_cast<std::size_t>(i)] = fit.q;
+    for (Index b = first_bond(i); b < end_bond(i); ++b) {
+      const Index k = b - first_bond(i);
+      weight_.col(b) = fit.w.row(k).transpose();
+      modulus_[b] = fit.c[k];
+    }
+  }
   const Real mean = modulus_.size() ? modulus_.mean() : 1.0;
   statistics_.min_bond_modulus_ratio = modulus_.size() ? modulus_.minCoeff() / mean : 1.0;
 }

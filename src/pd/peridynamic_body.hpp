@@ -18,6 +18,17 @@
 // energy density for every homogeneous strain at each node with a mirror-symmetric family, except
 // shear moduli the family cannot carry with positive bonds (reported: transverse shear of a
 // two-layer plate lattice is too soft). Energy is positive (c >= 0, Q projected to PSD).
+// surface_correction: plate (3D plate lattices, z = thickness): six generalized dilatations, the
+// strain tensor estimate theta = (xx, yy, zz, yz, xz, xy) (tensor components) with weights exact for
+// every homogeneous strain and, as far as the family allows (least squares in the null space of the
+// exactness conditions), blind to first and second strain gradients - so a node sees the strain at its
+// own height in bending (no spurious theta_zz) and curvature gradients do not read as transverse shear;
+// Q_i = C_plate - B(c) with C_plate the plane-stress law (in-plane block E/(1-nu^2), sigma_zz = E
+// eps_zz uncoupled, shear moduli mu); bond moduli: same-layer bonds isotropic (half the in-plane
+// shear), vertical bonds half of E_zz, all cross-layer bonds 10 % of the in-plane modulus (against the
+// zig-zag w hourglass). Exact homogeneous energy of the plate law at every node; bending energy = sum
+// over the layers of V_k 1/2 eps(z_k) C eps(z_k) less the cross-layer share (exact lumping when the
+// layers sit at the Gauss points of the thickness, see cell_lattice.hpp).
 #include <cstdint>
 #include <vector>
 
@@ -27,7 +38,11 @@ namespace lamina::pd {
 
 enum class Influence { one, inverse_distance };            // omega = 1 | delta / x
 enum class Kinematics { three_dimensional, plane_stress, plane_strain };
-enum class SurfaceCorrection { none, energy };
+enum class SurfaceCorrection { none, energy, plate };
+
+using Vec6 = Eigen::Matrix<Real, 6, 1>;
+using Mat6 = Eigen::Matrix<Real, 6, 6>;
+using Matrix6X = Eigen::Matrix<Real, 6, Eigen::Dynamic>;
 
 struct BodyOptions {
   Real horizon = 1.0;
@@ -43,6 +58,7 @@ struct BodyStatistics {
   Real min_bond_modulus_ratio = 0;  // min c_ij / mean c_ij (negative: the correction had to soften some bonds)
   Real family_kinds = 0;            // distinct families calibrated (energy correction)
   Real max_dilatation_error = 0;    // over the nodes: |theta - tr eps| for the unit normal strains
+  Real max_gradient_residual = 0;   // plate: largest response of theta to a unit first or second strain gradient (x horizon, horizon^2)
 };
 
 class PeridynamicBody {
@@ -65,10 +81,11 @@ class PeridynamicBody {
   Index reverse(Index b) const { return reverse_[static_cast<std::size_t>(b)]; }  // bond j -> i of bond i -> j
   const Eigen::VectorXd& bond_length() const { return length_; }
   const Eigen::VectorXd& bond_volume() const { return bond_volume_; }  // beta_ij V_j
-  /// w^a_ij: column b holds the weights of the generalized dilatations theta_a (a < dimension; zero padded to 3).
-  const Eigen::Matrix3Xd& dilatation_weight() const { return weight_; }
-  /// Q_i (3 x 3, zero padded) coupling the dilatations of node i: 1/2 theta^T Q theta.
-  const Mat3& dilatation_coupling(Index i) const { return coupling_[static_cast<std::size_t>(i)]; }
+  /// w^a_ij: column b holds the weights of the generalized dilatations theta_a: rows 0-2 the normal
+  /// ones (a < dimension), rows 3-5 (yz, xz, xy) used by surface_correction: plate only; zero padded.
+  const Matrix6X& dilatation_weight() const { return weight_; }
+  /// Q_i (6 x 6, zero padded) coupling the dilatations of node i: 1/2 theta^T Q theta.
+  const Mat6& dilatation_coupling(Index i) const { return coupling_[static_cast<std::size_t>(i)]; }
   const Eigen::VectorXd& bond_modulus() const { return modulus_; }      // c_ij
   const Eigen::VectorXd& dilatation_modulus() const { return kappa_; }  // kappa_i
   const BodyStatistics& statistics() const { return statistics_; }
@@ -79,6 +96,7 @@ class PeridynamicBody {
  private:
   void build_families();
   void calibrate(const Eigen::VectorXd& young, const Eigen::VectorXd& poisson);
+  void calibrate_plate();
 
   PointMatrix positions_;
   Eigen::VectorXd volumes_;
@@ -86,8 +104,8 @@ class PeridynamicBody {
   std::vector<Index> family_start_;
   std::vector<std::int32_t> neighbour_, reverse_;
   Eigen::VectorXd length_, bond_volume_, modulus_, kappa_;
-  Eigen::Matrix3Xd weight_;
-  std::vector<Mat3> coupling_;
+  Matrix6X weight_;
+  std::vector<Mat6> coupling_;
   Eigen::VectorXd young_, poisson_;
   BodyStatistics statistics_;
 };

@@ -38,10 +38,13 @@ struct AdaptiveDynamicRelaxationOptions {
   Real absolute_tolerance = -1.0;   // max|R| (N); < 0: tolerance x max nodal internal/external force
   int switch_iteration = 2000;      // k_switch: relative test only before it, relative OR absolute after
   int max_iterations = 20000;
-  int max_cuts = 6;                 // increment halvings before giving up
+  int max_cuts = 6;                 // halvings of one increment before giving up
+  int continuations = 4;            // further max_iterations blocks from the reached state before a halving
   Real density_factor = 1.0;        // lambda_ii = density_factor / 4 dt^2 sum_j |K0_ij|
   Real velocity_guard = 1e-10;      // 1K_ii = 0 where |Udot_i| < guard |U_i|
   bool secant_predictor = true;     // start each increment from the extrapolated previous states
+  bool linear_start = false;        // first increment starts from the linear solution (else interpolated)
+  bool kinetic_fallback = true;     // kinetic-energy damping while the adaptive damping c is zero
 };
 
 struct ExplicitOptions {
