@@ -8,14 +8,24 @@
 namespace lamina::pd {
 
 LinearPeridynamicSolid::LinearPeridynamicSolid(const PeridynamicBody& body) : body_(body) {
-  reverse_weight_.resize(6, body.bonds());
   reverse_modulus_.resize(body.bonds());
 #pragma omp parallel for schedule(static)
-  for (Index b = 0; b < body.bonds(); ++b) {
-    const Index r = body.reverse(b);
-    reverse_weight_.col(b) = body.dilatation_weight().col(r);
-    reverse_modulus_[b] = body.bond_modulus()[r];
+  for (Index b = 0; b < body.bonds(); ++b) reverse_modulus_[b] = body.bond_modulus()[body.reverse(b)];
+  // Components in use: plain LPS has one dilatation (row 0), the energy correction three normal ones,
+  // the plate correction all six.
+  switch (body.options().surface_correction) {
+    case SurfaceCorrection::none: components_ = 1; break;
+    case SurfaceCorrection::energy: components_ = 3; break;
+    default: components_ = 6; break;
   }
+  const Index k = components_;
+  weight_used_ = body.dilatation_weight().topRows(k);
+  reverse_weight_used_.resize(k, body.bonds());
+#pragma omp parallel for schedule(static)
+  for (Index b = 0; b < body.bonds(); ++b) reverse_weight_used_.col(b) = weight_used_.col(body.reverse(b));
+  coupling_used_.resize(k * k, body.nodes());
+  for (Index i = 0; i < body.nodes(); ++i)
+    coupling_used_.col(i) = Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(body.dilatation_coupling(i).topLeftCorner(k, k)).data(), k * k);
 }
 
 BondState LinearPeridynamicSolid::bond_state(const PointMatrix& u, bool linearised) const {
@@ -27,7 +37,6 @@ BondState LinearPeridynamicSolid::bond_state(const PointMatrix& u, bool linearis
 void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool linearised) const {
   const PeridynamicBody& body = body_;
   const Index n = body.nodes();
-  const bool planar = body.dimension() == 2;
   // resize is a no-op when s already has the sizes (explicit and ADR loops reuse one state)
   s.direction.resize(3, body.bonds());
   s.length.resize(body.bonds());
@@ -36,15 +45,36 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
   s.shear_dilatation.resize(3, n);
   s.dilatation_force.resize(6, n);
   s.pair_force.resize(body.bonds());
+  // dilatation rows beyond the components in use stay zero
+  if (components_ < 6) {
+    s.dilatation_force.setZero();
+    s.shear_dilatation.setZero();
+    if (components_ < 3) s.dilatation.setZero();
+  }
+  switch (components_) {
+    case 1: bond_state_kernel<1>(u, s, linearised); break;
+    case 3: bond_state_kernel<3>(u, s, linearised); break;
+    default: bond_state_kernel<6>(u, s, linearised); break;
+  }
+}
+
+template <int K>
+void LinearPeridynamicSolid::bond_state_kernel(const PointMatrix& u, BondState& s, bool linearised) const {
+  using VecK = Eigen::Matrix<Real, K, 1>;
+  using MatK = Eigen::Matrix<Real, K, K>;
+  const PeridynamicBody& body = body_;
+  const Index n = body.nodes();
+  const bool planar = body.dimension() == 2;
   const auto& x0 = body.bond_length();
-  const auto& w = body.dilatation_weight();
   const auto& c = body.bond_modulus();
   const auto& bv = body.bond_volume();
-  const bool shear = body.options().surface_correction == SurfaceCorrection::plate;  // rows 3-5 of w in use
+  const Real* w = weight_used_.data();
+  const Real* rw = reverse_weight_used_.data();
+  const Real* q = coupling_used_.data();
   // Stage 1: extensions and dilatation (gather over each node's bonds).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
-    Vec6 theta = Vec6::Zero();
+    VecK theta = VecK::Zero();
     const Vec3 pi = body.positions().col(i), ui = u.col(i);
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
       const Index j = body.neighbour(b);
@@ -70,28 +100,29 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
       s.direction.col(b) = m;
       s.length[b] = y;
       s.extension[b] = e;
-      if (shear)
-        theta += w.col(b) * (e * bv[b]);
-      else
-        theta.head<3>() += w.col(b).head<3>() * (e * bv[b]);
+      theta += Eigen::Map<const VecK>(w + K * b) * (e * bv[b]);
     }
-    s.dilatation.col(i) = theta.head<3>();
-    s.shear_dilatation.col(i) = theta.tail<3>();
-    if (shear)
-      s.dilatation_force.col(i) = body.dilatation_coupling(i) * theta;
-    else
-      s.dilatation_force.col(i) << body.dilatation_coupling(i).topLeftCorner<3, 3>() * theta.head<3>(), Vec3::Zero();
+    const VecK force = Eigen::Map<const MatK>(q + K * K * i) * theta;
+    if constexpr (K == 1) {
+      s.dilatation(0, i) = theta[0];
+      s.dilatation_force(0, i) = force[0];
+    } else if constexpr (K == 3) {
+      s.dilatation.col(i) = theta;
+      s.dilatation_force.col(i).template head<3>() = force;
+    } else {
+      s.dilatation.col(i) = theta.template head<3>();
+      s.shear_dilatation.col(i) = theta.template tail<3>();
+      s.dilatation_force.col(i) = force;
+    }
   }
   // Stage 2: pair forces P_ij = V_i beta V_j (t_ij + t_ji).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
+    const VecK force_i = s.dilatation_force.col(i).template head<K>();
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
       const Index j = body.neighbour(b);
-      const Real tij = (shear ? s.dilatation_force.col(i).dot(w.col(b))
-                              : s.dilatation_force.col(i).head<3>().dot(w.col(b).head<3>())) +
-                       c[b] * s.extension[b];
-      const Real tji = (shear ? s.dilatation_force.col(j).dot(reverse_weight_.col(b))
-                              : s.dilatation_force.col(j).head<3>().dot(reverse_weight_.col(b).head<3>())) +
+      const Real tij = force_i.dot(Eigen::Map<const VecK>(w + K * b)) + c[b] * s.extension[b];
+      const Real tji = s.dilatation_force.col(j).template head<K>().dot(Eigen::Map<const VecK>(rw + K * b)) +
                        reverse_modulus_[b] * s.extension[b];
       s.pair_force[b] = body.volumes()[i] * bv[b] * (tij + tji);
     }

@@ -54,10 +54,17 @@ class LinearPeridynamicSolid {
   const PeridynamicBody& body() const { return body_; }
 
  private:
+  /// Stages 1-2 of bond_state for K dilatation components in use (1: plain LPS, 3: energy, 6: plate).
+  template <int K>
+  void bond_state_kernel(const PointMatrix& u, BondState& s, bool linearised) const;
+
   const PeridynamicBody& body_;
-  // w and c of the reverse bond j->i stored at bond i->j, so the pair-force pass reads them in order
-  Matrix6X reverse_weight_;
+  // c of the reverse bond j->i stored at bond i->j, so the pair-force pass reads it in order
   Eigen::VectorXd reverse_modulus_;
+  // w of bond i->j and of its reverse j->i, compacted to the K components in use (K x bonds), and Q_i
+  // (K x K per node): the per-iteration passes stream K doubles per bond instead of 6
+  int components_ = 6;
+  Eigen::MatrixXd weight_used_, reverse_weight_used_, coupling_used_;
 };
 
 }  // namespace lamina::pd
