@@ -1,6 +1,5 @@
 #include "pd/peridynamic_analysis.hpp"
 
-
 #include <fmt/format.h>
 
 #include <Spectra/MatOp/SparseCholesky.h>
@@ -92,7 +91,7 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
     buckling_modes(imperfection.mode);
     positions += scaled(modes_[static_cast<std::size_t>(imperfection.mode - 1)]);
     build_body(positions);
-    imperfection_load_factor_ = eigenvalues_.front();
+    imperfection_load_factor_ = eigenvalues_.empty() ? 0.0 : eigenvalues_.front();
     eigenvalues_.clear();
     modes_.clear();
   }
