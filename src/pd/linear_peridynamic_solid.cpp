@@ -38,6 +38,7 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
   const PeridynamicBody& body = body_;
   const Index n = body.nodes();
   // resize is a no-op when s already has the sizes (explicit and ADR loops reuse one state)
+  const bool fresh = s.dilatation_force.cols() != n;
   s.direction.resize(3, body.bonds());
   s.length.resize(body.bonds());
   s.extension.resize(body.bonds());
@@ -45,8 +46,8 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
   s.shear_dilatation.resize(3, n);
   s.dilatation_force.resize(6, n);
   s.pair_force.resize(body.bonds());
-  // dilatation rows beyond the components in use stay zero
-  if (components_ < 6) {
+  // dilatation rows beyond the components in use stay zero (set once, when the state is new)
+  if (fresh && components_ < 6) {
     s.dilatation_force.setZero();
     s.shear_dilatation.setZero();
     if (components_ < 3) s.dilatation.setZero();
