@@ -12,6 +12,7 @@ namespace {
 struct MomentEntry {
   io::Selection select;
   std::array<geometry::ScalarField, 3> moment;
+  bool per_edge_length = false;  // edge_moment: moment per unit length of the selected free edges
   mpm::LoadRamp ramp;
   io::SourceLocation location;
 };
@@ -51,8 +52,12 @@ void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, sh
   s.thickness_points = static_cast<int>(section.integer("thickness_points", 3, 1, 7));
   s.hourglass = section.real("hourglass", 0.1, 0.0, 1.0);
   if (section.has("hourglass_bending")) s.hourglass_bending = section.real("hourglass_bending", std::nullopt, 0.0, 2.0);
+  if (section.has("hourglass_membrane")) s.hourglass_membrane = section.real("hourglass_membrane", std::nullopt, 0.0, 2.0);
+  if (section.has("hourglass_transverse"))
+    s.hourglass_transverse = section.real("hourglass_transverse", std::nullopt, 0.0, 2.0);
   s.shear_factor = section.real("shear_factor", 5.0 / 6.0, 0.0, 1.0, true);
   s.warping_correction = section.boolean("warping_correction", true);
+  s.kirchhoff_transverse_hourglass = section.word("transverse_hourglass", {"standard", "kirchhoff"}, "standard") == "kirchhoff";
   section.reject_unknown_keys();
 }
 
@@ -93,7 +98,9 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
         MomentEntry entry;
         entry.location = io::location_of(m);
         if (auto s = io::read_selection(m.required("select"))) entry.select = *s;
-        io::NodeReader vector = m.required("moment");
+        entry.per_edge_length = m.has("edge_moment");
+        if (entry.per_edge_length && m.has("moment")) m.child("edge_moment").error("either moment (total) or edge_moment (per unit length), not both");
+        io::NodeReader vector = entry.per_edge_length ? m.child("edge_moment") : m.required("moment");
         if (vector.defined()) {
           if (vector.is_sequence() && vector.node().size() == 3) {
             const auto items = vector.elements();
@@ -186,7 +193,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
   for (std::size_t i = 0; i < mo.moments.size(); ++i) {
     const auto& m = mo.moments[i];
     mpm::NodalLoad load;
-    load.kind = mpm::NodalLoad::Kind::moment;
+    load.kind = m.per_edge_length ? mpm::NodalLoad::Kind::edge_moment : mpm::NodalLoad::Kind::moment;
     try {
       load.nodes = resolve_or_throw(m.select, model.cloud);
     } catch (const InputError& e) {

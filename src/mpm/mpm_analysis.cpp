@@ -221,8 +221,9 @@ void MpmAnalysis::prepare_loads() {
       case NodalLoad::Kind::body_force:
         for (Index node : l.nodes) prepared.weights.push_back({node, mass_[node]});
         break;
-      case NodalLoad::Kind::traction: {
-        // force per unit length on the boundary edges whose two nodes are selected (reference lengths)
+      case NodalLoad::Kind::traction:
+      case NodalLoad::Kind::edge_moment: {
+        // force (moment) per unit length on the boundary edges whose two nodes are selected (reference lengths)
         std::map<Index, Real> length_share;
         for (const auto& [edge, count] : uses) {
           if (count != 1 || !selected[static_cast<std::size_t>(edge.first)] || !selected[static_cast<std::size_t>(edge.second)]) continue;
@@ -242,8 +243,9 @@ void MpmAnalysis::prepare_loads() {
         break;
       default: break;
     }
-    if ((l.kind == NodalLoad::Kind::traction && prepared.weights.empty()) || (l.kind == NodalLoad::Kind::pressure && prepared.elements.empty()))
-      throw InputError(l.label, l.kind == NodalLoad::Kind::traction ? "a selection holding at least one free edge of the shell (both end nodes)"
+    const bool per_edge = l.kind == NodalLoad::Kind::traction || l.kind == NodalLoad::Kind::edge_moment;
+    if ((per_edge && prepared.weights.empty()) || (l.kind == NodalLoad::Kind::pressure && prepared.elements.empty()))
+      throw InputError(l.label, per_edge ? "a selection holding at least one free edge of the shell (both end nodes)"
                                                                       : "a selection holding all four nodes of at least one element",
                        fmt::format("{} nodes and none", l.nodes.size()));
     prepared_loads_.push_back(std::move(prepared));
@@ -275,6 +277,7 @@ void MpmAnalysis::compute_external_forces(Real load) {
         for (const auto& [node, w] : prepared.weights) f_ext_.col(node) += factor * w * vector_at(node);
         break;
       case NodalLoad::Kind::moment:
+      case NodalLoad::Kind::edge_moment:
         for (const auto& [node, w] : prepared.weights) m_ext_.col(node) += factor * w * vector_at(node);
         break;
       case NodalLoad::Kind::pressure:

@@ -31,10 +31,10 @@ struct NodalConstraint {
 };
 
 struct NodalLoad {
-  enum class Kind { force, traction, pressure, body_force, moment, mass, initial_velocity };
+  enum class Kind { force, traction, pressure, body_force, moment, edge_moment, mass, initial_velocity };
   Kind kind = Kind::force;
   IndexList nodes;
-  std::array<geometry::ScalarField, 3> vector;  // force / traction / body force (per unit mass) / moment / velocity
+  std::array<geometry::ScalarField, 3> vector;  // force / traction / body force (per unit mass) / moment / moment per unit edge length / velocity
   geometry::ScalarField scalar;                 // pressure, mass
   LoadRamp ramp;
   std::string label;

@@ -81,7 +81,8 @@ Real BelytschkoTsayShell::stable_time_step(const NodeMatrix& x) const {
 
 Real BelytschkoTsayShell::stable_time_step(Real characteristic_length) const {
   // hourglass springs add about r of the membrane stiffness
-  const Real c = material_.plate_wave_speed() * std::sqrt(1.0 + section_.hourglass);
+  const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : section_.hourglass;
+  const Real c = material_.plate_wave_speed() * std::sqrt(1.0 + r_mem);
   return characteristic_length / c;
 }
 
@@ -187,17 +188,38 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   ml.row(2).setZero();
 
   // hourglass resistance (eqs (30)-(36))
-  if (section_.hourglass > 0.0 || section_.hourglass_bending > 0.0) {
+  const Real r = section_.hourglass;
+  const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
+  const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : r;
+  const Real r_w = section_.hourglass_transverse >= 0.0 ? section_.hourglass_transverse : r;
+  if (r_bend > 0.0 || r_mem > 0.0 || r_w > 0.0) {
     Row4 hv;
     hv << 1.0, -1.0, 1.0, -1.0;
     const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
     const Real bsq = b1.squaredNorm() + b2.squaredNorm();
-    const Real E = material_.young_modulus(), G = material_.shear_modulus(), r = section_.hourglass;
-    const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
+    const Real E = material_.young_modulus(), G = material_.shear_modulus();
     const Real c_bend = r_bend * E * h * h * h * area / 192.0 * bsq;
-    const Real c_w = r * k * G * h * h * h / 12.0 * bsq;
-    const Real c_mem = r * E * h * area / 8.0 * bsq;
-    const Real rates[kHourglassSize] = {gamma.dot(tx), gamma.dot(ty), gamma.dot(vz), gamma.dot(vx), gamma.dot(vy)};
+    const Real c_w = r_w * k * G * h * h * h / 12.0 * bsq;
+    const Real c_mem = r_mem * E * h * area / 8.0 * bsq;
+    // transverse mode: q_w = gamma . v_z + cx . theta_x + cy . theta_y (cx = cy = 0 in the standard form)
+    Row4 cx = Row4::Zero(), cy = Row4::Zero();
+    if (section_.kirchhoff_transverse_hourglass) {
+      // -1/2 of the rotation part of sum_e s_e L_e gamma_e over the edges e = (I, J), s_e = +1, -1, +1, -1,
+      // less its value for a constant rotation (removed with the mean rotation, as gamma removes linear w)
+      const Real sign[4] = {1.0, -1.0, 1.0, -1.0};
+      for (int e = 0; e < 4; ++e) {
+        const int i = e, j = (e + 1) % 4;
+        const Real dxe = xh(j) - xh(i), dye = yh(j) - yh(i);
+        cy(i) -= 0.25 * sign[e] * dxe;
+        cy(j) -= 0.25 * sign[e] * dxe;
+        cx(i) += 0.25 * sign[e] * dye;
+        cx(j) += 0.25 * sign[e] * dye;
+      }
+      cy.array() -= 0.25 * hv.dot(xh);
+      cx.array() += 0.25 * hv.dot(yh);
+    }
+    const Real rates[kHourglassSize] = {gamma.dot(tx), gamma.dot(ty), gamma.dot(vz) + cx.dot(tx) + cy.dot(ty),
+                                        gamma.dot(vx), gamma.dot(vy)};
     const Real stiff[kHourglassSize] = {c_bend, c_bend, c_w, c_mem, c_mem};
     Real hg_power = 0.0;
     for (int i = 0; i < kHourglassSize; ++i) {
@@ -209,6 +231,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     ml.row(0) += gamma * hourglass[0];
     ml.row(1) += gamma * hourglass[1];
     fl.row(2) += gamma * hourglass[2];
+    ml.row(0) += cx * hourglass[2];
+    ml.row(1) += cy * hourglass[2];
     fl.row(0) += gamma * hourglass[3];
     fl.row(1) += gamma * hourglass[4];
   }

@@ -40,7 +40,16 @@ struct ShellSection {
   /// bending energy of the same bilinear rotation field is (2/3)(1 + (1 - nu)/2) D c^2
   /// (equal at r = 0.99 for nu = 0.3), as in Belytschko-Leviathan's physical stabilization.
   Real hourglass_bending = -1.0;
+  /// Coefficient of the two in-plane (membrane) hourglass modes; negative = use `hourglass`.
+  Real hourglass_membrane = -1.0;
+  /// Coefficient of the transverse (w) hourglass mode; negative = use `hourglass`.
+  Real hourglass_transverse = -1.0;
   bool warping_correction = true;    // BWC-type rigid-body projection for warped elements
+  /// Transverse (w) hourglass strain: false = gamma . v_z (Belytschko-Tsay 1983); true = the hourglass
+  /// part of the edge-tied transverse shears (MITC4-like: sum_e s_e [w_J - w_I + edge . (theta_y, -theta_x)_avg]),
+  /// which is zero for rigid motions, constant curvature of parallelograms and the Kirchhoff twist
+  /// w = c x y, so the spring resists only the spurious w mode, not twisting of the shell.
+  bool kirchhoff_transverse_hourglass = false;
 };
 
 /// What one element evaluation returns (global frame).

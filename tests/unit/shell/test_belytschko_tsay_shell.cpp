@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <array>
 #include <cmath>
 
 #include "shell/belytschko_tsay_shell.hpp"
@@ -42,8 +43,10 @@ TEST(shell_BelytschkoTsay, LobattoRulesIntegratePolynomialsExactly) {
 
 TEST(shell_BelytschkoTsay, RigidBodyMotionGivesNoForce) {
   Fixture f;
-  BelytschkoTsayShell shell(f.section, f.material);
+  for (bool kirchhoff : {false, true})
   for (Real warp : {0.0, 0.05}) {
+    f.section.kirchhoff_transverse_hourglass = kirchhoff;
+    BelytschkoTsayShell shell(f.section, f.material);
     const NodeMatrix x = element(some_rotation(), 2.0, 1.0, 0.3, warp);
     const Vec3 w(0.3, -1.2, 0.8), v0(1.0, 2.0, -3.0), centre = x.rowwise().mean();
     NodeMatrix v, omega;
@@ -211,9 +214,13 @@ TEST(shell_BelytschkoTsay, PhysicalBendingHourglassMatchesIntegratedBendingEnerg
 TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
   Fixture f;
   f.section.hourglass = 0.1;
+  for (bool kirchhoff : {false, true})
+  for (Real r_mem : {-1.0, 0.33})  // also with the physical membrane hourglass stiffness
   for (Real r_bend : {-1.0, 1.0})  // also with the physical rotational hourglass stiffness
   for (Real nu : {0.3, 0.0})
   for (Real aspect : {1.0, 3.0, 0.75}) {
+    f.section.kirchhoff_transverse_hourglass = kirchhoff;
+    f.section.hourglass_membrane = r_mem;
     f.section.hourglass_bending = r_bend;
     f.material = LinearElasticShellMaterial(2.0e5, nu, 7.8e-3);
     BelytschkoTsayShell shell(f.section, f.material);
@@ -241,9 +248,86 @@ TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
     const Real omega_max = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Real, 24, 24>>(A).eigenvalues().maxCoeff());
     const Real critical = 2.0 / omega_max;
     const Real estimate = shell.stable_time_step(x);
-    EXPECT_LE(estimate, critical) << "aspect " << aspect << " nu " << nu << " r_bend " << r_bend;
+    EXPECT_LE(estimate, critical) << "aspect " << aspect << " nu " << nu << " r_bend " << r_bend << " r_mem " << r_mem;
     EXPECT_GE(estimate, 0.3 * critical) << "aspect " << aspect << " nu " << nu << " r_bend " << r_bend;  // not uselessly small
   }
+}
+
+/// transverse_hourglass: kirchhoff. The transverse hourglass strain is the hourglass part of the edge-tied
+/// shears, so the Kirchhoff twist w = c x y (theta_x = c x, theta_y = -c y: no transverse shear anywhere)
+/// and constant curvature of a parallelogram store no hourglass energy, while the standard gamma . v_z
+/// spring resists the twist; the spurious w mode (w = c h_I, no rotation) is resisted by both.
+TEST(shell_BelytschkoTsay, KirchhoffTransverseHourglassLeavesTwistFree) {
+  Fixture f;
+  f.section.hourglass = 0.0;
+  f.section.hourglass_transverse = 0.1;
+  const Mat3 R = some_rotation();
+  for (Real skew : {0.0, 0.4}) {
+    const NodeMatrix x = element(R, 2.0, 1.0, skew);
+    const NodeMatrix xl = R.transpose() * (x.colwise() - x.rowwise().mean());
+    auto energy = [&](bool kirchhoff, auto field) {
+      f.section.kirchhoff_transverse_hourglass = kirchhoff;
+      BelytschkoTsayShell shell(f.section, f.material);
+      NodeMatrix v, omega;
+      for (int k = 0; k < 4; ++k) {
+        const auto [w, tx, ty] = field(xl(0, k), xl(1, k));
+        v.col(k) = R * Vec3(0, 0, w);
+        omega.col(k) = R * Vec3(tx, ty, 0);
+      }
+      std::vector<Real> stress(shell.stress_size(), 0.0);
+      Real hourglass[5] = {0, 0, 0, 0, 0};
+      Real h = f.h;
+      const auto res = shell.update(x, v, omega, 1.0, stress.data(), hourglass, h);
+      EXPECT_NEAR(res.force.rowwise().sum().norm(), 0.0, 1e-9);  // forces stay self-equilibrated
+      return res.hourglass_power;
+    };
+    const Real c = 1e-4;
+    auto twist = [c](Real x, Real y) { return std::array<Real, 3>{c * x * y, c * x, -c * y}; };
+    auto curvature = [c](Real x, Real) { return std::array<Real, 3>{-0.5 * c * x * x, 0.0, c * x}; };
+    int node = 0;
+    auto spurious = [c, &node](Real, Real) { return std::array<Real, 3>{c * ((node++ % 2) ? -1.0 : 1.0), 0.0, 0.0}; };
+    const Real scale = f.material.young_modulus() * f.h * c * c;
+    EXPECT_LT(std::abs(energy(true, twist)), 1e-12 * scale) << "skew " << skew;
+    EXPECT_GT(energy(false, twist), 1e-6 * scale) << "skew " << skew;
+    EXPECT_LT(std::abs(energy(true, curvature)), 1e-12 * scale) << "skew " << skew;
+    node = 0;
+    const Real kirchhoff_w = energy(true, spurious);
+    node = 0;
+    const Real standard_w = energy(false, spurious);
+    EXPECT_GT(kirchhoff_w, 1e-6 * scale);
+    EXPECT_GT(standard_w, 1e-6 * scale);
+    if (skew == 0.0) {
+      EXPECT_NEAR(kirchhoff_w / standard_w, 1.0, 1e-12);  // same spring on a rectangle
+    }
+  }
+}
+
+/// hourglass_membrane / hourglass_transverse replace `hourglass` for their own modes only.
+TEST(shell_BelytschkoTsay, PerModeHourglassCoefficients) {
+  Fixture f;
+  const NodeMatrix x = element(some_rotation(), 2.0, 1.0, 0.2);
+  const Mat3 R = some_rotation();
+  NodeMatrix vx = NodeMatrix::Zero(), vz = NodeMatrix::Zero();
+  const Real hpat[4] = {1, -1, 1, -1};
+  for (int k = 0; k < 4; ++k) {
+    vx.col(k) = R * Vec3(1e-4 * hpat[k], 0, 0);
+    vz.col(k) = R * Vec3(0, 0, 1e-4 * hpat[k]);
+  }
+  auto energy = [&](Real r, Real r_mem, Real r_w, const NodeMatrix& v) {
+    f.section.hourglass = r;
+    f.section.hourglass_membrane = r_mem;
+    f.section.hourglass_transverse = r_w;
+    BelytschkoTsayShell shell(f.section, f.material);
+    std::vector<Real> stress(shell.stress_size(), 0.0);
+    Real hourglass[5] = {0, 0, 0, 0, 0};
+    Real h = f.h;
+    return shell.update(x, v, NodeMatrix::Zero(), 1.0, stress.data(), hourglass, h).hourglass_power;
+  };
+  EXPECT_NEAR(energy(0.1, 0.3, -1.0, vx), 3.0 * energy(0.1, -1.0, -1.0, vx), 1e-9 * energy(0.1, -1.0, -1.0, vx));
+  EXPECT_DOUBLE_EQ(energy(0.1, 0.3, -1.0, vz), energy(0.1, -1.0, -1.0, vz));
+  EXPECT_NEAR(energy(0.1, -1.0, 0.5, vz), 5.0 * energy(0.1, -1.0, -1.0, vz), 1e-9 * energy(0.1, -1.0, -1.0, vz));
+  EXPECT_DOUBLE_EQ(energy(0.1, -1.0, 0.5, vx), energy(0.1, -1.0, -1.0, vx));
+  EXPECT_EQ(energy(0.0, -1.0, -1.0, vx), 0.0);
 }
 
 }  // namespace
