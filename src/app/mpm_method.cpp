@@ -141,9 +141,10 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
   } else {
     const auto& m = c.materials[0].spec;
     io::SourceLocation where{c.file, 0, 0, "materials.0"};
-    if (m.model != material::MaterialModel::linear_elastic)
-      problem_at(where, ".model", "linear_elastic (corotational; neo_hookean and j2_plasticity are not in this build yet)",
-                 "another model");
+    if (m.model == material::MaterialModel::neo_hookean)
+      p.material = mpm::MpmProblem::Material::neo_hookean;
+    else if (m.model != material::MaterialModel::linear_elastic)
+      problem_at(where, ".model", "linear_elastic or neo_hookean (j2_plasticity is not in this build yet)", "j2_plasticity");
     if (!m.density || !(*m.density > 0)) problem_at(where, ".density", "a positive density (mpm is an explicit dynamic method)", "none");
     p.young = m.E;
     p.poisson = m.nu;

@@ -91,7 +91,10 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   const Vec3 lower = mesh.nodes.rowwise().minCoeff();
   grid_ = BackgroundGrid(lower - Vec3::Constant(cell), cell);
 
-  material_ = std::make_unique<shell::LinearElasticShellMaterial>(problem_.young, problem_.poisson, problem_.density);
+  if (problem_.material == MpmProblem::Material::neo_hookean)
+    material_ = std::make_unique<shell::NeoHookeanShellMaterial>(problem_.young, problem_.poisson, problem_.density);
+  else
+    material_ = std::make_unique<shell::LinearElasticShellMaterial>(problem_.young, problem_.poisson, problem_.density);
   element_ = std::make_unique<shell::BelytschkoTsayShell>(problem_.section, *material_);
   wave_speed_ = material_->dilatational_wave_speed();
 
@@ -158,7 +161,9 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
       shell::NodeMatrix x, v, w;
       for (int a = 0; a < 4; ++a) {
         const Index node = mesh.quads(a, e);
-        x.col(a) = x_.col(node);
+        // mid-step configuration x^{n-1/2}: the chord velocity of a finite rigid rotation is a rigid
+        // velocity field there (no spurious strain), and the strain increments integrate to second order
+        x.col(a) = x_.col(node) - 0.5 * dt_stress * vpos_.col(node);
         v.col(a) = vpos_.col(node);
         w.col(a) = omega_.col(node);
       }

@@ -60,6 +60,8 @@ struct MpmOptions {
 
 struct MpmProblem {
   ShellMesh mesh;
+  enum class Material { linear_elastic, neo_hookean };
+  Material material = Material::linear_elastic;  // corotational linear elastic or neo-Hookean plane stress
   Real young = 0.0, poisson = 0.0, density = 0.0;
   shell::ShellSection section;
   std::vector<NodalConstraint> constraints;

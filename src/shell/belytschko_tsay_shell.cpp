@@ -92,7 +92,7 @@ ShellResultants BelytschkoTsayShell::resultants(const Real* stress, Real thickne
   for (int q = 0; q < nq; ++q) {
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * thickness;
     const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * thickness;
-    const Real* s = stress + kStressComponents * q;
+    const Real* s = stress + point_stride() * q;
     r.nxx += w * s[0];
     r.nyy += w * s[1];
     r.nxy += w * s[2];
@@ -161,7 +161,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * h;
     const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * h;
     const Real rate[kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
-    Real* s = stress + kStressComponents * q;
+    Real* s = stress + point_stride() * q;
     Real old[kStressComponents];
     std::copy(s, s + kStressComponents, old);
     dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * material_.update(s, rate, dt);

@@ -75,8 +75,10 @@ class BelytschkoTsayShell {
   BelytschkoTsayShell(const ShellSection& section, const ShellMaterial& material);
 
   int thickness_points() const { return static_cast<int>(rule_.points.size()); }
-  /// Doubles of stress state per element (5 per through-thickness point).
-  int stress_size() const { return kStressComponents * thickness_points(); }
+  /// Doubles per through-thickness point: 5 stresses and the material's history values.
+  int point_stride() const { return kStressComponents + material_.state_size(); }
+  /// Doubles of stress state per element (point_stride() per through-thickness point).
+  int stress_size() const { return point_stride() * thickness_points(); }
   static constexpr int kHourglassSize = 5;  // bending x, bending y, transverse w, membrane x, membrane y
 
   /// Advance the element by one step: rates from the node velocities v and angular velocities

@@ -16,9 +16,11 @@ constexpr int kStressComponents = 5;
 class ShellMaterial {
  public:
   virtual ~ShellMaterial() = default;
-  /// sigma (5 components) is advanced by the rates over dt. rate = (d_xx, d_yy, 2 d_xy, 2 d_yz, 2 d_zx).
-  /// Returns the thickness strain rate d_zz that keeps sigma_zz = 0.
+  /// sigma (5 components, followed by state_size() history values) is advanced by the rates over dt.
+  /// rate = (d_xx, d_yy, 2 d_xy, 2 d_yz, 2 d_zx). Returns the thickness strain rate d_zz that keeps sigma_zz = 0.
   virtual Real update(Real* sigma, const Real* rate, Real dt) const = 0;
+  /// History values stored after the 5 stresses at each through-thickness point (all zero initially).
+  virtual int state_size() const { return 0; }
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
   virtual Real density() const = 0;
@@ -40,6 +42,25 @@ class LinearElasticShellMaterial final : public ShellMaterial {
 
  private:
   Real young_, poisson_, density_;
+};
+
+/// Compressible neo-Hookean plane stress in the corotational frame (PRODUCT.md / notes: hyperelastic
+/// option using the deformation accumulated in the local frame). The logarithmic strain H = int D dt of
+/// the in-plane rates is accumulated in the frame (history: H_xx, H_yy, H_xy, ln lambda_3); the left
+/// stretch is V = exp(H), b = V^2, and the Kirchhoff stress tau = mu (b - I) + lambda ln J I with
+/// lambda_3 from tau_zz = 0 (Newton), sigma = tau / J. Exact for stretching along axes fixed in the
+/// frame; transverse shear stays linear (G). Reduces to LinearElasticShellMaterial at small strain.
+class NeoHookeanShellMaterial final : public ShellMaterial {
+ public:
+  NeoHookeanShellMaterial(Real young, Real poisson, Real density);
+  Real update(Real* sigma, const Real* rate, Real dt) const override;
+  int state_size() const override { return 4; }
+  Real young_modulus() const override { return young_; }
+  Real poisson_ratio() const override { return poisson_; }
+  Real density() const override { return density_; }
+
+ private:
+  Real young_, poisson_, density_, mu_, lambda_;
 };
 
 }  // namespace lamina::shell
