@@ -350,7 +350,8 @@ Real MpmAnalysis::advance(Real load) {
   compute_external_forces(load);
   const Real c = o.mass_damping;
   f_net_ = f_ext_ - f_int_;
-  Eigen::Matrix3Xd m_net = m_ext_ - m_int_;
+  Eigen::Matrix3Xd& m_net = m_net_;
+  m_net = m_ext_ - m_int_;
   {
     Real r2 = 0, ext2 = 0, int2 = 0;
     for (Index i = 0; i < n; ++i) {
@@ -371,18 +372,21 @@ Real MpmAnalysis::advance(Real load) {
   }
 
   // 4. P2G: mass, momentum and force per free component
-  Eigen::Matrix3Xd grid_mass, grid_momentum, grid_force;
+  // (work arrays are members, reused across steps: no per-step allocation)
+  Eigen::Matrix3Xd &grid_mass = grid_mass_, &grid_momentum = grid_momentum_, &grid_force = grid_force_;
   {
     StageTimer t(stage_seconds_, "p2g");
-    const PointMatrix node_mass = (Eigen::Matrix3Xd::Ones(3, n).array().rowwise() * mass_.transpose().array()).matrix();
-    PointMatrix momentum = v_;
-    for (Index i = 0; i < n; ++i) momentum.col(i) *= mass_[i];
-    grid_.scatter(node_mass, free_, grid_mass);
-    grid_.scatter(momentum, free_, grid_momentum);
+    if (node_mass_.cols() != n) node_mass_ = (Eigen::Matrix3Xd::Ones(3, n).array().rowwise() * mass_.transpose().array()).matrix();
+    momentum_.resize(3, n);
+    for (Index i = 0; i < n; ++i) momentum_.col(i) = mass_[i] * v_.col(i);
+    grid_.scatter(node_mass_, free_, grid_mass);
+    grid_.scatter(momentum_, free_, grid_momentum);
     grid_.scatter(f_net_, free_, grid_force);
   }
   // 5. grid update (eqs (5)-(7))
-  Eigen::Matrix3Xd grid_velocity(3, grid_mass.cols()), grid_acceleration(3, grid_mass.cols());
+  Eigen::Matrix3Xd &grid_velocity = grid_velocity_, &grid_acceleration = grid_acceleration_;
+  grid_velocity.resize(3, grid_mass.cols());
+  grid_acceleration.resize(3, grid_mass.cols());
   {
     StageTimer t(stage_seconds_, "grid");
     const Index slots = grid_mass.cols();
@@ -401,7 +405,7 @@ Real MpmAnalysis::advance(Real load) {
   // 6. G2P velocities; rotations at the nodes
   {
     StageTimer t(stage_seconds_, "g2p");
-    PointMatrix v_pic, a_grid;
+    PointMatrix &v_pic = v_pic_, &a_grid = a_grid_;
     grid_.gather(grid_velocity, v_pic);
     grid_.gather(grid_acceleration, a_grid);
     const Real flip = o.flip;
@@ -431,12 +435,6 @@ Real MpmAnalysis::advance(Real load) {
     for (Index i = 0; i < n; ++i) p += c * (mass_[i] * v_.col(i).squaredNorm() + inertia_[i] * omega_.col(i).squaredNorm());
     energy_.damping += dt * p;
   }
-  // external work over this step (loads at n, displacement with the velocity that moves the nodes)
-  {
-    Real w = 0;
-    for (Index i = 0; i < n; ++i) w += f_ext_.col(i).dot(vpos_.col(i)) + m_ext_.col(i).dot(omega_.col(i));
-    energy_.external += dt * w;
-  }
   if (o.kinetic_damping && kinetic < kinetic_previous_) {
     energy_.damping += kinetic;
     for (Index i = 0; i < n; ++i)
@@ -449,6 +447,13 @@ Real MpmAnalysis::advance(Real load) {
     for (Index i = 0; i < n; ++i) kinetic += 0.5 * mass_[i] * v_.col(i).squaredNorm();
   } else {
     kinetic_previous_ = kinetic;
+  }
+  // external work over this step (loads at n, displacement with the velocity that moves the nodes,
+  // after kinetic damping: a step whose velocities were zeroed at a peak moves nothing and does no work)
+  {
+    Real w = 0;
+    for (Index i = 0; i < n; ++i) w += f_ext_.col(i).dot(vpos_.col(i)) + m_ext_.col(i).dot(omega_.col(i));
+    energy_.external += dt * w;
   }
   energy_.kinetic = kinetic;
   energy_.transfer += transfer_loss_.sum();
