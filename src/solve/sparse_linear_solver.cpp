@@ -68,6 +68,16 @@ Eigen::VectorXd refine(Eigen::VectorXd& x, const Eigen::VectorXd& b, Real norm_a
   return r;
 }
 
+/// A backward-stable solve whose solution still misses the equations: the system is nearly singular.
+[[noreturn]] void nearly_singular(const SolverReport& report) {
+  throw AnalysisError(fmt::format(
+      "the linear system is nearly singular: the solution misses the equations by a relative residual of {:.3g} "
+      "(backward error {:.3g}, {}). Check for a free rigid-body motion or a support that is too small; a constraint "
+      "method can also be unstable with the chosen integration (e.g. essential_bc: lagrange with reduced "
+      "volumetric integration): try penalty or nitsche",
+      report.residual, report.backward_error, report.method));
+}
+
 [[noreturn]] void singular(const std::string& detail) {
   throw AnalysisError(
       "the stiffness matrix is singular (" + detail +
@@ -135,6 +145,7 @@ Eigen::VectorXd solve_symmetric(const SparseMatrix& upper, const Eigen::VectorXd
   report.backward_error = backward_error(r, norm_symmetric_upper(upper), x, b);
   if (!(report.backward_error <= options.residual_tolerance))
     singular(fmt::format("backward error {:.3g} (relative residual {:.3g}) after the solve", report.backward_error, report.residual));
+  if (!(report.residual <= options.max_relative_residual)) nearly_singular(report);
   return x;
 }
 
@@ -164,6 +175,7 @@ Eigen::VectorXd solve_general(const SparseMatrix& a, const Eigen::VectorXd& b, S
   report.backward_error = backward_error(r, norm_a, x, b);
   if (!(report.backward_error <= options.residual_tolerance))
     singular(fmt::format("backward error {:.3g} (relative residual {:.3g}) after the solve", report.backward_error, report.residual));
+  if (!(report.residual <= options.max_relative_residual)) nearly_singular(report);
   return x;
 }
 

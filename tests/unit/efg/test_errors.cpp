@@ -53,6 +53,37 @@ TEST(EfgErrors, FreeRigidBodyModeIsAnAnalysisError) {
   EXPECT_THROW(a.solve(), AnalysisError);
 }
 
+/// Lagrange multipliers on a nearly incompressible body with a one-point volumetric rule give a
+/// system that the sparse LU solves backward-stably (backward error ~1e-25) yet whose solution
+/// misses the equations by a relative residual of ~1e7: it must stop (exit 3), not return garbage.
+TEST(EfgErrors, NearlySingularSystemIsAnAnalysisError) {
+  EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(10, 10, 1)), {11, 11, 3}, 1e4, 0.4999);
+  EssentialCondition clamp;
+  clamp.region = set("xmin", p.cloud);
+  clamp.constrained = {true, true, true};
+  p.constraints.push_back(clamp);
+  EssentialCondition clamp_y = clamp;
+  clamp_y.region = set("ymin", p.cloud);
+  p.constraints.push_back(clamp_y);
+  EfgLoad load;
+  load.kind = EfgLoad::Kind::traction;
+  load.region = set("zmax", p.cloud);
+  load.vector = {constant(0.0), constant(0.0), constant(-1.0)};
+  p.loads.push_back(load);
+  p.options.mls.basis = mls::Basis::quadratic;
+  p.options.mls.kappa = 2.5;
+  p.options.reduced_volumetric = true;
+  p.options.volumetric_gauss = {1, 1, 1};
+  p.options.essential = EssentialMethod::lagrange;
+  EfgAnalysis a(p, {});
+  try {
+    a.solve();
+    FAIL() << "expected AnalysisError; displacement " << a.displacement_at(Vec3(10, 10, 0.5)).transpose();
+  } catch (const AnalysisError& e) {
+    EXPECT_NE(std::string(e.what()).find("nearly singular"), std::string::npos) << e.what();
+  }
+}
+
 TEST(EfgErrors, NodeOutsideTheBodyIsAnInputError) {
   EfgProblem p = cantilever();
   p.cloud.positions(0, 5) = 7.0;
