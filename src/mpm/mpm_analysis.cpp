@@ -156,14 +156,15 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
   Index bad = -1;
   {
     StageTimer t(stage_seconds_, "element");
+    // mid-step configuration x^{n-1/2}: the chord velocity of a finite rigid rotation is a rigid
+    // velocity field there (no spurious strain), and the strain increments integrate to second order
+    x_mid_ = x_ - 0.5 * dt_stress * vpos_;
 #pragma omp parallel for schedule(static) reduction(max : bad) if (e_count > 256)
     for (Index e = 0; e < e_count; ++e) {
       shell::NodeMatrix x, v, w;
       for (int a = 0; a < 4; ++a) {
         const Index node = mesh.quads(a, e);
-        // mid-step configuration x^{n-1/2}: the chord velocity of a finite rigid rotation is a rigid
-        // velocity field there (no spurious strain), and the strain increments integrate to second order
-        x.col(a) = x_.col(node) - 0.5 * dt_stress * vpos_.col(node);
+        x.col(a) = x_mid_.col(node);
         v.col(a) = vpos_.col(node);
         w.col(a) = omega_.col(node);
       }

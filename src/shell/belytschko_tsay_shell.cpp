@@ -88,11 +88,11 @@ Real BelytschkoTsayShell::stable_time_step(Real characteristic_length) const {
 
 ShellResultants BelytschkoTsayShell::resultants(const Real* stress, Real thickness) const {
   ShellResultants r;
-  const int nq = thickness_points();
+  const int nq = thickness_points(), stride = point_stride();
   for (int q = 0; q < nq; ++q) {
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * thickness;
     const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * thickness;
-    const Real* s = stress + point_stride() * q;
+    const Real* s = stress + stride * q;
     r.nxx += w * s[0];
     r.nyy += w * s[1];
     r.nxy += w * s[2];
@@ -153,7 +153,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
 
   // stress update through the thickness and resultants (eqs (27)-(29))
   const Real h = thickness;
-  const int nq = thickness_points();
+  const int nq = thickness_points(), stride = point_stride();  // (one virtual call per element)
   Real nxx = 0, nyy = 0, nxy = 0, mxx = 0, myy = 0, mxy = 0, qxz = 0, qyz = 0;
   Real power = 0.0, dzz_mean = 0.0;
   const Real k = section_.shear_factor;
@@ -161,7 +161,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * h;
     const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * h;
     const Real rate[kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
-    Real* s = stress + point_stride() * q;
+    Real* s = stress + stride * q;
     Real old[kStressComponents];
     std::copy(s, s + kStressComponents, old);
     dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * material_.update(s, rate, dt);
