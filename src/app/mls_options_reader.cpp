@@ -14,7 +14,7 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
 
   io::NodeReader support = section.child("support");
   if (support.defined() && support.expect_map()) {
-    // {shape: box|sphere, kappa: k} | {nearest: N} | {radius: [rx, ry, rz]} | {mode: all|variable, nearest: N, scale: s}
+    // {shape: box|sphere, kappa: k} | {shape: box, kappa: [kx, ky, kz]} | {nearest: N} | {radius: [rx, ry, rz]} | {mode: all|variable, nearest: N, scale: s}
     const bool has_nearest = support.has("nearest"), has_radius = support.has("radius"), has_kappa = support.has("kappa");
     const std::string mode = support.word("mode", {"kappa", "fixed_radius", "nearest", "all", "variable"},
                                           has_radius ? "fixed_radius" : (has_nearest && !has_kappa) ? "nearest" : "kappa");
@@ -27,7 +27,19 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
     const std::string shape = support.word("shape", {"box", "sphere"}, default_shape);
     o.shape = shape == "sphere" ? mls::SupportShape::sphere : mls::SupportShape::box;
     const int m = (o.basis == mls::Basis::linear ? dimension + 1 : (dimension + 1) * (dimension + 2) / 2);
-    if (o.mode == mls::SupportMode::kappa) o.kappa = support.real("kappa", shape == "sphere" ? 2.5 : 2.0, 0.0, 100.0, true);
+    if (o.mode == mls::SupportMode::kappa) {
+      if (support.child("kappa").is_sequence()) {
+        // one factor per axis (box supports only)
+        if (shape != "box") support.child("kappa").error("a single number for a sphere support");
+        const Vec3 k = support.vec3("kappa", std::nullopt);
+        if (!(k.head(dimension).array() > 0.0).all() || !(k.array() <= 100.0).all())
+          support.child("kappa").error("factors in (0, 100]");
+        o.kappa_axes = k;
+        o.kappa = k.maxCoeff();
+      } else {
+        o.kappa = support.real("kappa", shape == "sphere" ? 2.5 : 2.0, 0.0, 100.0, true);
+      }
+    }
     if (o.mode == mls::SupportMode::fixed_radius) {
       Vec3 r = support.vec3("radius", std::nullopt);
       if ((r.array() <= 0).any()) support.child("radius").error("positive radii");

@@ -409,7 +409,8 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
 
   // volume stiffness
   start = Clock::now();
-  std::vector<Real> values;
+  solve::SparseMatrix K = pattern.zero_matrix();
+  Real* values = K.valuePtr();
   Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * n);
   VolumeAssembly input;
   input.shapes = shapes_.get();
@@ -424,9 +425,10 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
     input.material_of_reduced_point = &material_of_reduced_point_;
     input.vci_reduced = vci ? &xi_reduced : nullptr;
   }
-  assemble_volume(input, pattern, values, f);
+  const VolumeAssemblyReport volume_report = assemble_volume(input, pattern, values, f);
   const Real volume_seconds = seconds_since(start);
   timings_["assembly_volume_s"] = volume_seconds;
+  timings_["assembly_direct_writes"] = volume_report.direct ? 1.0 : 0.0;
   timings_["gauss_points_per_second"] =
       static_cast<Real>(volume_.size()) / std::max(volume_seconds + timings_["neighbours_s"], 1e-12);
   progress(0.6, "assembled");
@@ -449,7 +451,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
   Real max_diagonal = 0;
   for (Index d = 0; d < 3 * n; ++d) {
     const Index p = pattern.position(d, d);
-    if (p >= 0) max_diagonal = std::max(max_diagonal, std::abs(values[static_cast<std::size_t>(p)]));
+    if (p >= 0) max_diagonal = std::max(max_diagonal, std::abs(values[p]));
   }
   {
     Eigen::VectorXd surface_sum = Eigen::VectorXd::Zero(n), point_sum = Eigen::VectorXd::Zero(n);
@@ -510,7 +512,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
       } else {
         penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
       }
-      pattern.scatter(sv.neighbours, Kc, values.data());
+      pattern.scatter(sv.neighbours, Kc, values);
       scatter_vector(sv, fc, f);
     }
   }
@@ -520,9 +522,6 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
 
   // solve
   start = Clock::now();
-  const solve::SparseMatrix K = pattern.matrix(values);
-  values.clear();
-  values.shrink_to_fit();
   timings_["dofs"] = static_cast<Real>(3 * n + multipliers);
   timings_["nonzeros"] = static_cast<Real>(K.nonZeros());
   if (lagrange) {

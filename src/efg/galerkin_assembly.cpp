@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <exception>
 
 namespace lamina::efg {
@@ -57,7 +59,9 @@ std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, con
       try {
         IndexList& nodes = result[static_cast<std::size_t>(c)];
         for (Index q = quadrature.cell_begin[static_cast<std::size_t>(c)]; q < quadrature.cell_begin[static_cast<std::size_t>(c + 1)]; ++q) {
-          shapes.evaluate(quadrature.points.col(q), integrals ? 1 : 0, sv);
+          // the neighbour lists alone need only the support search; VCI also needs the shape functions
+          if (mine) shapes.evaluate(quadrature.points.col(q), 1, sv);
+          else shapes.neighbours(quadrature.points.col(q), sv.neighbours);
           merged.clear();
           std::set_union(nodes.begin(), nodes.end(), sv.neighbours.begin(), sv.neighbours.end(), std::back_inserter(merged));
           nodes.swap(merged);
@@ -107,51 +111,117 @@ Eigen::Matrix3Xd vci_correction(const VolumeIntegrals& volume, const Eigen::Matr
   return xi;
 }
 
-void assemble_volume(const VolumeAssembly& in, const solve::BlockPattern& pattern, std::vector<Real>& values,
-                     Eigen::VectorXd& f) {
+VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::BlockPattern& pattern, Real* values, Eigen::VectorXd& f) {
   const VolumeQuadrature& quadrature = *in.quadrature;
   const Index cells = static_cast<Index>(quadrature.cell_begin.size()) - 1;
   const Index n_nodes = in.shapes->node_count();
   const bool symmetric = pattern.symmetric();
   const int threads = omp_get_max_threads();
+  // Processing order: the cells sorted along the axis of largest extent of their centres, so that
+  // contiguous chunks are slabs of the body whatever the cell numbering.
+  std::vector<Index> order(static_cast<std::size_t>(cells));
+  {
+    PointMatrix centres = PointMatrix::Zero(3, cells);
+    for (Index c = 0; c < cells; ++c) {
+      const Index q0 = quadrature.cell_begin[static_cast<std::size_t>(c)], q1 = quadrature.cell_begin[static_cast<std::size_t>(c + 1)];
+      for (Index q = q0; q < q1; ++q) centres.col(c) += quadrature.points.col(q);
+      if (q1 > q0) centres.col(c) /= static_cast<Real>(q1 - q0);
+    }
+    // axes by decreasing extent: slabs along the first, the thinnest direction innermost (cells
+    // that share most of their nodes follow each other, so their matrix entries stay in cache)
+    std::array<int, 3> axes{0, 1, 2};
+    if (cells > 0) {
+      const Vec3 extent = centres.rowwise().maxCoeff() - centres.rowwise().minCoeff();
+      std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) { return extent[a] > extent[b]; });
+    }
+    for (Index c = 0; c < cells; ++c) order[static_cast<std::size_t>(c)] = c;
+    const Real tolerance = 1e-9 * std::max<Real>(1.0, centres.cwiseAbs().maxCoeff());
+    std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
+      for (const int axis : axes) {
+        const Real difference = centres(axis, a) - centres(axis, b);
+        if (std::abs(difference) > tolerance) return difference < 0;
+      }
+      return false;
+    });
+  }
+  // phase p of thread t: cells order[bounds[3t + p] .. bounds[3t + p + 1])
+  std::vector<Index> bounds;
   std::vector<std::vector<Real>> partial_values(static_cast<std::size_t>(threads));
-  std::vector<std::pair<Index, Index>> ranges(static_cast<std::size_t>(threads), {0, 0});
+  std::vector<std::pair<Index, Index>> partial_ranges(static_cast<std::size_t>(threads), {0, 0});
   std::vector<Eigen::VectorXd> partial_f(static_cast<std::size_t>(threads));
   FirstError failure;
   int team_size = 1;
+  bool direct = true;
+  auto cell_nodes_of = [&](Index k) -> const IndexList& {
+    return (*in.cell_nodes)[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
+  };
 #pragma omp parallel num_threads(threads)
   {
     const int t = omp_get_thread_num();
     const int team = omp_get_num_threads();
 #pragma omp single
-    team_size = team;
-    const Index first = chunk_begin(cells, team, t), last = chunk_begin(cells, team, t + 1);
-    // value range of this chunk
-    Index lo = std::numeric_limits<Index>::max(), hi = 0;
-    for (Index c = first; c < last; ++c) {
-      const auto r = pattern.value_range((*in.cell_nodes)[static_cast<std::size_t>(c)]);
-      if (r.second > r.first) {
-        lo = std::min(lo, r.first);
-        hi = std::max(hi, r.second);
+    {
+      team_size = team;
+      bounds.resize(static_cast<std::size_t>(3 * team));
+      for (int k = 0; k < team; ++k) {
+        const Index first = chunk_begin(cells, team, k), last = chunk_begin(cells, team, k + 1);
+        bounds[static_cast<std::size_t>(3 * k)] = first;
+        bounds[static_cast<std::size_t>(3 * k + 1)] = first + (last - first) / 2;
+        bounds[static_cast<std::size_t>(3 * k + 2)] = last;
+      }
+      // Direct writes are safe when no node belongs to the cells of two threads in the same phase
+      // (two cells share matrix entries only through common nodes).
+      std::vector<int> owner(static_cast<std::size_t>(n_nodes));
+      for (int phase = 0; phase < 2 && direct && team > 1; ++phase) {
+        std::fill(owner.begin(), owner.end(), -1);
+        for (int k = 0; k < team && direct; ++k)
+          for (Index c = bounds[static_cast<std::size_t>(3 * k + phase)]; c < bounds[static_cast<std::size_t>(3 * k + phase + 1)] && direct; ++c)
+            for (const Index node : cell_nodes_of(c)) {
+              int& o = owner[static_cast<std::size_t>(node)];
+              if (o >= 0 && o != k) {
+                direct = false;
+                break;
+              }
+              o = k;
+            }
       }
     }
-    if (hi <= lo) lo = hi = 0;
-    ranges[static_cast<std::size_t>(t)] = {lo, hi};
-    std::vector<Real>& mine = partial_values[static_cast<std::size_t>(t)];
-    mine.assign(static_cast<std::size_t>(hi - lo), 0.0);
+    const Index* bound = bounds.data() + 3 * t;
+    // Where the values go: straight into `values`, or this thread's copy of its range.
+    Real* target = values;
+    Index offset = 0;
+    if (!direct) {
+      Index lo = std::numeric_limits<Index>::max(), hi = 0;
+      for (Index c = bound[0]; c < bound[2]; ++c) {
+        const auto r = pattern.value_range(cell_nodes_of(c));
+        if (r.second > r.first) {
+          lo = std::min(lo, r.first);
+          hi = std::max(hi, r.second);
+        }
+      }
+      if (hi <= lo) lo = hi = 0;
+      partial_ranges[static_cast<std::size_t>(t)] = {lo, hi};
+      std::vector<Real>& mine = partial_values[static_cast<std::size_t>(t)];
+      mine.assign(static_cast<std::size_t>(hi - lo), 0.0);
+      target = mine.data();
+      offset = lo;
+    }
     Eigen::VectorXd& my_f = partial_f[static_cast<std::size_t>(t)];
     my_f = Eigen::VectorXd::Zero(3 * n_nodes);
 
     std::vector<int> local_index(static_cast<std::size_t>(n_nodes), -1);
+    std::vector<int> rank_of(static_cast<std::size_t>(n_nodes), -1);
     std::vector<mls::ShapeFunctionValues> sv;
-    Eigen::MatrixXd X[3], Xt[3], WX[3], S[9], SM[9];
+    // Y(q, 3i + a) = phi_i,a(x_q) (trial), Yt the test gradients (VCI); C = Yt^T diag(weight) Y, so that
+    // the 3 x 3 block (i, j) of C is c_ab = sum_q weight_q phi_i,a phi_j,b.
+    Eigen::MatrixXd Y, Yt, WY, C_lambda, C_mu;
     Eigen::VectorXd w, wl, wm;
     const bool full = !symmetric || in.vci;
-    // Loads the gradients of the points [q0, q0 + Q) of a rule into X (trial) and Xt (test, VCI).
+    // Loads the gradients of the points [q0, q0 + Q) of a rule into Y (trial) and Yt (test, VCI).
     auto load_points = [&](const VolumeQuadrature& rule, Index q0, Index Q, Index n, bool with_body_force,
                            const Eigen::Matrix3Xd* xi) {
       if (static_cast<Index>(sv.size()) < Q) sv.resize(static_cast<std::size_t>(Q));
-      for (int a = 0; a < 3; ++a) X[a].setZero(Q, n);
+      Y.setZero(Q, 3 * n);
       w.resize(Q);
       for (Index q = 0; q < Q; ++q) {
         auto& s = sv[static_cast<std::size_t>(q)];
@@ -160,7 +230,7 @@ void assemble_volume(const VolumeAssembly& in, const solve::BlockPattern& patter
         for (std::size_t k = 0; k < s.neighbours.size(); ++k) {
           const int i = local_index[static_cast<std::size_t>(s.neighbours[k])];
           if (i < 0) throw std::logic_error("EFG assembly: neighbour outside the cell's node list");
-          for (int a = 0; a < 3; ++a) X[a](q, i) = s.dphi(a, static_cast<Index>(k));
+          for (int a = 0; a < 3; ++a) Y(q, 3 * i + a) = s.dphi(a, static_cast<Index>(k));
         }
         if (with_body_force && in.body_force) {
           const Vec3 b = in.body_force->col(q0 + q) * w[q];
@@ -170,29 +240,24 @@ void assemble_volume(const VolumeAssembly& in, const solve::BlockPattern& patter
         }
       }
       if (xi) {
-        for (int a = 0; a < 3; ++a) Xt[a] = X[a];
+        Yt = Y;
         for (Index q = 0; q < Q; ++q) {
           const auto& s = sv[static_cast<std::size_t>(q)];
           for (std::size_t k = 0; k < s.neighbours.size(); ++k) {
             const Index I = s.neighbours[k];
             const int i = local_index[static_cast<std::size_t>(I)];
-            for (int a = 0; a < 3; ++a) Xt[a](q, i) += (*xi)(a, I) * s.phi[static_cast<Index>(k)];
+            for (int a = 0; a < 3; ++a) Yt(q, 3 * i + a) += (*xi)(a, I) * s.phi[static_cast<Index>(k)];
           }
         }
       }
     };
-    // out[3a + b] = T_a^T diag(weight) X_b (T = test gradients)
-    auto products = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd* out) {
-      const Eigen::MatrixXd* T = in.vci ? Xt : X;
-      for (int b = 0; b < 3; ++b) WX[b].noalias() = weight.asDiagonal() * X[b];
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) {
-          if (!full && b < a) continue;
-          out[3 * a + b].noalias() = T[a].transpose() * WX[b];
-        }
-      if (!full)
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < a; ++b) out[3 * a + b] = out[3 * b + a].transpose();
+    // out = Yt^T diag(weight) Y; only the upper triangle when symmetric.
+    auto products = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd& out) {
+      WY.noalias() = weight.asDiagonal() * Y;
+      const Index size = Y.cols();
+      out.resize(size, size);
+      if (full) out.noalias() = (in.vci ? Yt : Y).transpose() * WY;
+      else out.triangularView<Eigen::Upper>() = Y.transpose() * WY;
     };
     auto material_weights = [&](const std::vector<int>& ids, Index q0, Index Q, Eigen::VectorXd& lambda_w,
                                  Eigen::VectorXd& mu_w) {
@@ -204,93 +269,121 @@ void assemble_volume(const VolumeAssembly& in, const solve::BlockPattern& patter
         mu_w[q] = w[q] * mat.mu();
       }
     };
-    for (Index c = first; c < last; ++c) {
-      try {
-        const IndexList& nodes = (*in.cell_nodes)[static_cast<std::size_t>(c)];
-        const Index n = static_cast<Index>(nodes.size());
-        const Index q0 = quadrature.cell_begin[static_cast<std::size_t>(c)];
-        const Index Q = quadrature.cell_begin[static_cast<std::size_t>(c + 1)] - q0;
-        if (Q == 0 || n == 0) continue;
-        for (Index i = 0; i < n; ++i) local_index[static_cast<std::size_t>(nodes[static_cast<std::size_t>(i)])] = static_cast<int>(i);
-        load_points(quadrature, q0, Q, n, true, in.vci);
-        if (in.reduced) {
-          // selective reduced integration: mu part on the full rule, lambda part on the reduced rule
-          material_weights(*in.material_of_point, q0, Q, wl, wm);
-          products(wm, SM);
-          const VolumeQuadrature& reduced = *in.reduced;
-          const Index r0 = reduced.cell_begin[static_cast<std::size_t>(c)];
-          const Index R = reduced.cell_begin[static_cast<std::size_t>(c + 1)] - r0;
-          load_points(reduced, r0, R, n, false, in.vci_reduced ? in.vci_reduced : in.vci);
-          material_weights(*in.material_of_reduced_point, r0, R, wl, wm);
-          products(wl, S);
+    auto assemble_cell = [&](Index c) {
+      const IndexList& nodes = (*in.cell_nodes)[static_cast<std::size_t>(c)];
+      const Index n = static_cast<Index>(nodes.size());
+      const Index q0 = quadrature.cell_begin[static_cast<std::size_t>(c)];
+      const Index Q = quadrature.cell_begin[static_cast<std::size_t>(c + 1)] - q0;
+      if (Q == 0 || n == 0) return;
+      for (Index i = 0; i < n; ++i) local_index[static_cast<std::size_t>(nodes[static_cast<std::size_t>(i)])] = static_cast<int>(i);
+      load_points(quadrature, q0, Q, n, true, in.vci);
+      // K block (i, j) = lambda_scale c_lambda + mu_scale (c_mu^T + tr(c_mu) I)
+      Real lambda_scale = 1.0, mu_scale = 1.0;
+      const Eigen::MatrixXd* lambda_part = &C_lambda;
+      if (in.reduced) {
+        // selective reduced integration: mu part on the full rule, lambda part on the reduced rule
+        material_weights(*in.material_of_point, q0, Q, wl, wm);
+        products(wm, C_mu);
+        const VolumeQuadrature& reduced = *in.reduced;
+        const Index r0 = reduced.cell_begin[static_cast<std::size_t>(c)];
+        const Index R = reduced.cell_begin[static_cast<std::size_t>(c + 1)] - r0;
+        load_points(reduced, r0, R, n, false, in.vci_reduced ? in.vci_reduced : in.vci);
+        material_weights(*in.material_of_reduced_point, r0, R, wl, wm);
+        products(wl, C_lambda);
+      } else {
+        const int m0 = (*in.material_of_point)[static_cast<std::size_t>(q0)];
+        bool uniform = true;
+        for (Index q = 0; q < Q; ++q)
+          if ((*in.material_of_point)[static_cast<std::size_t>(q0 + q)] != m0) uniform = false;
+        if (uniform) {
+          const auto& mat = (*in.materials)[static_cast<std::size_t>(m0)];
+          products(w, C_mu);
+          lambda_part = &C_mu;
+          lambda_scale = mat.lambda();
+          mu_scale = mat.mu();
         } else {
-          const int m0 = (*in.material_of_point)[static_cast<std::size_t>(q0)];
-          bool uniform = true;
-          for (Index q = 0; q < Q; ++q)
-            if ((*in.material_of_point)[static_cast<std::size_t>(q0 + q)] != m0) uniform = false;
-          if (uniform) {
-            const auto& mat = (*in.materials)[static_cast<std::size_t>(m0)];
-            products(w, SM);
-            for (int k = 0; k < 9; ++k) {
-              S[k] = SM[k] * mat.lambda();
-              SM[k] *= mat.mu();
-            }
-          } else {
-            material_weights(*in.material_of_point, q0, Q, wl, wm);
-            products(wl, S);
-            products(wm, SM);
-          }
+          material_weights(*in.material_of_point, q0, Q, wl, wm);
+          products(wl, C_lambda);
+          products(wm, C_mu);
         }
-        // K_IJ(a, b) = S_ab(I, J) + SM_ba(I, J) + delta_ab tr SM(I, J), added straight into the
-        // pattern (upper triangle when symmetric); node pairs that no quadrature point couples
-        // have exactly zero blocks and are not in the pattern.
-        for (Index jj = 0; jj < n; ++jj) {
-          const Index J = nodes[static_cast<std::size_t>(jj)];
-          const Index* first_neighbour = pattern.neighbours_begin(J);
-          const Index* last_neighbour = pattern.neighbours_end(J);
-          const Index* it = first_neighbour;
-          const Index end = symmetric ? jj + 1 : n;
-          Index column[3];
-          for (int b = 0; b < 3; ++b) column[b] = pattern.column_start(3 * J + b) - lo;
-          for (Index ii = 0; ii < end; ++ii) {
-            const Index I = nodes[static_cast<std::size_t>(ii)];
-            while (it != last_neighbour && *it < I) ++it;
-            if (it == last_neighbour) break;
-            if (*it != I) continue;
-            const Index r = 3 * static_cast<Index>(it - first_neighbour);
-            const Real trace = SM[0](ii, jj) + SM[4](ii, jj) + SM[8](ii, jj);
-            const bool diagonal = symmetric && I == J;
+      }
+      const Index size = 3 * n;
+      const Real* cl = lambda_part->data();
+      const Real* cm = C_mu.data();
+      // Added straight into the pattern (upper triangle when symmetric); node pairs that no
+      // quadrature point couples have exactly zero blocks and are not in the pattern.
+      for (Index jj = 0; jj < n; ++jj) {
+        const Index J = nodes[static_cast<std::size_t>(jj)];
+        // rank of every pattern neighbour I of J (a table lookup per pair instead of a merge, whose
+        // data-dependent loop exits were mispredicted once per pair)
+        const Index* neighbour = pattern.neighbours_begin(J);
+        const Index count = static_cast<Index>(pattern.neighbours_end(J) - neighbour);
+        for (Index k = 0; k < count; ++k) rank_of[static_cast<std::size_t>(neighbour[k])] = static_cast<int>(k);
+        const Index end = symmetric ? jj + 1 : n;
+        Index column[3];
+        for (int b = 0; b < 3; ++b) column[b] = pattern.column_start(3 * J + b) - offset;
+        for (Index ii = 0; ii < end; ++ii) {
+          const Index I = nodes[static_cast<std::size_t>(ii)];
+          const Index rank = rank_of[static_cast<std::size_t>(I)];
+          if (rank < 0 || rank >= count || neighbour[rank] != I) continue;  // stale entry: not in the pattern
+          const Index r = 3 * rank;
+          // blocks (ii, jj) of the lambda and mu products: entry (a, b) at [(3 jj + b) size + 3 ii + a]
+          const Real* bl = cl + 3 * jj * size + 3 * ii;
+          const Real* bm = cm + 3 * jj * size + 3 * ii;
+          const Real trace = bm[0] + bm[size + 1] + bm[2 * size + 2];
+          if (symmetric && I == J) {
+            // diagonal block: the products are symmetric here, only their upper triangle is stored
             for (int b = 0; b < 3; ++b) {
-              Real* target = mine.data() + column[b] + r;
-              const int last_a = diagonal ? b : 2;
-              for (int a = 0; a <= last_a; ++a)
-                target[a] += S[3 * a + b](ii, jj) + SM[3 * b + a](ii, jj) + (a == b ? trace : 0.0);
+              Real* entry = target + column[b] + r;
+              for (int a = 0; a <= b; ++a)
+                entry[a] += lambda_scale * bl[b * size + a] + mu_scale * (bm[b * size + a] + (a == b ? trace : 0.0));
             }
+            continue;
+          }
+          for (int b = 0; b < 3; ++b) {
+            Real* entry = target + column[b] + r;
+            for (int a = 0; a < 3; ++a)
+              entry[a] += lambda_scale * bl[b * size + a] + mu_scale * (bm[a * size + b] + (a == b ? trace : 0.0));
           }
         }
-        for (Index i = 0; i < n; ++i) local_index[static_cast<std::size_t>(nodes[static_cast<std::size_t>(i)])] = -1;
-      } catch (...) {
-        failure.record(c);
-        break;
+      }
+      for (Index i = 0; i < n; ++i) local_index[static_cast<std::size_t>(nodes[static_cast<std::size_t>(i)])] = -1;
+    };
+    for (int phase = 0; phase < 2; ++phase) {
+      if (phase == 1 && direct) {
+#pragma omp barrier
+      }
+      for (Index k = bound[phase]; k < bound[phase + 1]; ++k) {
+        const Index c = order[static_cast<std::size_t>(k)];
+        try {
+          assemble_cell(c);
+        } catch (...) {
+          failure.record(c);
+          break;
+        }
       }
     }
   }
   failure.rethrow();
-  // deterministic reduction: thread order
-  values.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
-  const Index total = pattern.nonzeros();
+  if (!direct) {
+    // deterministic reduction: thread order
+    const Index total = pattern.nonzeros();
 #pragma omp parallel for schedule(static)
-  for (Index v = 0; v < total; ++v) {
-    Real sum = 0.0;
-    for (int t = 0; t < team_size; ++t) {
-      const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
-      if (v >= lo && v < hi) sum += partial_values[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
+    for (Index v = 0; v < total; ++v) {
+      Real sum = 0.0;
+      for (int t = 0; t < team_size; ++t) {
+        const auto [lo, hi] = partial_ranges[static_cast<std::size_t>(t)];
+        if (v >= lo && v < hi) sum += partial_values[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
+      }
+      values[v] += sum;
     }
-    values[static_cast<std::size_t>(v)] = sum;
   }
   if (f.size() != 3 * n_nodes) f = Eigen::VectorXd::Zero(3 * n_nodes);
   for (int t = 0; t < team_size; ++t)
     if (partial_f[static_cast<std::size_t>(t)].size() == f.size()) f += partial_f[static_cast<std::size_t>(t)];
+  VolumeAssemblyReport report;
+  report.direct = direct;
+  return report;
 }
 
 }  // namespace lamina::efg

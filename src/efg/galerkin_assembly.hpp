@@ -8,9 +8,13 @@
 // over the cell's neighbour nodes (the union of the neighbours of its quadrature points).
 //
 // Parallel and deterministic: the cells are split into one contiguous chunk per thread (the same
-// split for the same thread count); each thread adds into its own copy of the value range its
-// chunk touches; the copies are summed in thread order. With a different thread count only the
-// summation order of a few terms changes (differences at the 1e-16 relative level).
+// split for the same thread count), and each chunk into two halves. All threads assemble their first
+// halves, then (after a barrier) their second halves. When the value ranges of the halves assembled
+// at the same time do not overlap (cells ordered along the body and chunks wider than the supports,
+// the usual case) every thread adds straight into the matrix: no copies, and every value receives its
+// terms in a fixed order. Otherwise each thread adds into its own copy of the range it touches and
+// the copies are summed in thread order. With a different thread count only the summation order of a
+// few terms changes (differences at the 1e-16 relative level).
 //
 // Selective reduced integration (efg.integration.volumetric: reduced): the lambda term
 // lambda div u div v is integrated with a lower-order Gauss rule on the same cells (default order
@@ -65,8 +69,13 @@ struct VolumeAssembly {
   const Eigen::Matrix3Xd* vci_reduced = nullptr;                  // xi_I of the reduced rule (with vci)
 };
 
-/// Pass 2: adds the volume stiffness to values (pattern order) and the body force to f (3N).
-void assemble_volume(const VolumeAssembly& input, const solve::BlockPattern& pattern, std::vector<Real>& values,
+struct VolumeAssemblyReport {
+  bool direct = true;  // the threads added straight into `values` (no per-thread copies)
+};
+
+/// Pass 2: adds the volume stiffness to values (pattern.nonzeros() entries in pattern order, for
+/// example the value array of pattern.zero_matrix()) and the body force to f (3N).
+VolumeAssemblyReport assemble_volume(const VolumeAssembly& input, const solve::BlockPattern& pattern, Real* values,
                      Eigen::VectorXd& f);
 
 /// Deterministic split of [0, count) into `parts` contiguous chunks: begin of chunk t.

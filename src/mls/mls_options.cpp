@@ -25,6 +25,12 @@ void MlsOptions::validate() const {
           fmt::format("{}", gauss_beta), problems);
   if (mode == SupportMode::kappa)
     require(std::isfinite(kappa) && kappa > 0.0, "kappa", "a positive number", fmt::format("{}", kappa), problems);
+  if (kappa_axes != Vec3::Zero()) {
+    require(mode == SupportMode::kappa && shape == SupportShape::box, "kappa", "a single number for a sphere support",
+            "one factor per axis", problems);
+    require(kappa_axes.allFinite() && (kappa_axes.head(dimension).array() > 0.0).all(), "kappa",
+            "positive factors per axis", fmt::format("[{}, {}, {}]", kappa_axes[0], kappa_axes[1], kappa_axes[2]), problems);
+  }
   if (mode == SupportMode::fixed_radius) {
     const int used = shape == SupportShape::sphere ? 1 : std::clamp(dimension, 1, 3);
     bool positive = true;

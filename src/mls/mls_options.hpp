@@ -48,6 +48,9 @@ struct MlsOptions {
   SupportShape shape = SupportShape::box;
   SupportMode mode = SupportMode::kappa;
   Real kappa = 2.0;                         // mode kappa: R_I,d = kappa * h_I,d (sphere: kappa * max_d h_I,d)
+  /// Mode kappa, box supports: per-axis factors R_I,d = kappa_axes[d] * h_I,d instead of kappa (all
+  /// zero: unused). For example a shorter reach through a plate's thickness than in its plane.
+  Vec3 kappa_axes = Vec3::Zero();
   Vec3 radius = Vec3::Zero();               // mode fixed_radius: [rx, ry, rz] (sphere uses radius[0])
   int nearest = 27;                         // modes nearest / all / variable: N
   Real scale = 1.0;                         // modes nearest / all / variable: radius = scale * distance to N-th

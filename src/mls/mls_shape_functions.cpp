@@ -248,7 +248,9 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
       }
       radii_ = Eigen::Matrix3Xd::Zero(3, count);
       for (Index i = 0; i < count; ++i) {
-        if (options_.shape == SupportShape::box) {
+        if (options_.shape == SupportShape::box && options_.kappa_axes != Vec3::Zero()) {
+          radii_.col(i).head(dimension) = widen * options_.kappa_axes.head(dimension).cwiseProduct(spacing_.col(i).head(dimension));
+        } else if (options_.shape == SupportShape::box) {
           radii_.col(i).head(dimension) = options_.kappa * widen * spacing_.col(i).head(dimension);
         } else {
           radii_.col(i).head(dimension).setConstant(options_.kappa * widen * spacing_.col(i).head(dimension).maxCoeff());
@@ -603,7 +605,10 @@ void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real con
   std::string advice;
   switch (options_.mode) {
     case SupportMode::kappa:
-      advice = fmt::format("increase the support size kappa (now {})", options_.kappa);
+      advice = options_.kappa_axes != Vec3::Zero()
+                   ? fmt::format("increase the support size kappa (now [{}, {}, {}])", options_.kappa_axes[0],
+                                 options_.kappa_axes[1], options_.kappa_axes[2])
+                   : fmt::format("increase the support size kappa (now {})", options_.kappa);
       break;
     case SupportMode::fixed_radius:
       advice = fmt::format("increase the support radius (now [{}, {}, {}])", options_.radius[0], options_.radius[1],
@@ -646,6 +651,24 @@ void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunct
              : evaluate_kernel<3, Basis::quadratic>(x, derivative_order, out);
       break;
   }
+}
+
+void MlsShapeFunctions::neighbours(const Vec3& x_in, IndexList& out) const {
+  if (options_.singular_remedy) {
+    ShapeFunctionValues values;
+    evaluate(x_in, 0, values);
+    out.swap(values.neighbours);
+    return;
+  }
+  detail::MlsWorkspace& workspace = thread_workspace();
+  Vec3 x = x_in, rho;
+  for (int d = options_.dimension; d < 3; ++d) x[d] = 0.0;
+  switch (options_.dimension) {
+    case 1: gather<1>(x, 1.0, options_.nearest, workspace, rho); break;
+    case 2: gather<2>(x, 1.0, options_.nearest, workspace, rho); break;
+    default: gather<3>(x, 1.0, options_.nearest, workspace, rho); break;
+  }
+  out.assign(workspace.indices.begin(), workspace.indices.end());
 }
 
 ShapeFunctionValues MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order) const {

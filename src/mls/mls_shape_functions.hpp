@@ -63,6 +63,11 @@ class MlsShapeFunctions {
   void evaluate(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
   ShapeFunctionValues evaluate(const Vec3& x, int derivative_order) const;
 
+  /// The sorted neighbour list evaluate() would return at x, without the shape functions (a support
+  /// search only; with the singular remedy enabled a full evaluation, since the remedy may widen the
+  /// support). Does not check the moment matrix.
+  void neighbours(const Vec3& x, IndexList& out) const;
+
   /// evaluate() at every column of points, in parallel (OpenMP), results in the order of the points.
   /// Deterministic; if points fail, the error of the lowest failing column is rethrown.
   std::vector<ShapeFunctionValues> evaluate_all(const PointMatrix& points, int derivative_order) const;

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/memory.hpp"
 
 namespace lamina::solve {
 
@@ -107,6 +108,25 @@ SparseMatrix BlockPattern::matrix(const std::vector<Real>& values) const {
   std::copy(rows_.begin(), rows_.end(), m.innerIndexPtr());
   std::copy(values.begin(), values.end(), m.valuePtr());
   // mark as compressed (resizeNonZeros on a fresh matrix keeps it compressed)
+  return m;
+}
+
+SparseMatrix BlockPattern::zero_matrix() const {
+  const Index dofs = nodes_ * block_;
+  SparseMatrix m(dofs, dofs);
+  const Index count = static_cast<Index>(rows_.size());
+  m.resizeNonZeros(count);
+  std::copy(column_start_.begin(), column_start_.end(), m.outerIndexPtr());
+  Real* values = m.valuePtr();
+  int* rows = m.innerIndexPtr();
+  advise_huge_pages(values, static_cast<std::size_t>(count) * sizeof(Real));
+  advise_huge_pages(rows, static_cast<std::size_t>(count) * sizeof(int));
+  // first touch in parallel: the pages are faulted in by both threads
+#pragma omp parallel for schedule(static)
+  for (Index k = 0; k < count; ++k) {
+    values[k] = 0.0;
+    rows[k] = rows_[static_cast<std::size_t>(k)];
+  }
   return m;
 }
 

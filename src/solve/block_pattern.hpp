@@ -37,6 +37,8 @@ class BlockPattern {
 
   /// A matrix with this pattern and the given values (size nonzeros()).
   SparseMatrix matrix(const std::vector<Real>& values) const;
+  /// A matrix with this pattern and zero values (zeroed in parallel), to assemble into in place.
+  SparseMatrix zero_matrix() const;
 
   /// Adds a dense local matrix (block*n x block*n) over the nodes `local` (sorted ascending) to
   /// values[index - offset]. Symmetric patterns take the upper triangle (I < J, or I == J and a <= b).

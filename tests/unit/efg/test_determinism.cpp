@@ -1,8 +1,9 @@
 // Assembly is parallel over background cells: the same problem on 1 and 2 threads must give the
-// same stiffness matrix (cells split into contiguous chunks, per-thread values summed in thread
-// order: only the association of a few sums changes) and, through the direct solver, the same
+// same stiffness matrix (cells split into contiguous chunks assembled in two phases, either in place
+// or into per-thread copies summed in thread order: only the association of a few sums changes) and, through the direct solver, the same
 // solution up to the conditioning of the system.
 #include <gtest/gtest.h>
+#include <array>
 #include <omp.h>
 
 #include "efg/galerkin_assembly.hpp"
@@ -36,16 +37,30 @@ EfgProblem plate() {
   return p;
 }
 
+/// A strip 40 x 4 x 1: with 2 threads the cells assembled at the same time are far apart (direct writes).
+EfgProblem strip() {
+  EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(40, 4, 1)), {41, 5, 3}, 1e4, 0.3);
+  EssentialCondition clamp;
+  clamp.region = where("x < 1e-9", p.cloud);
+  clamp.constrained = {true, true, true};
+  p.constraints.push_back(clamp);
+  p.options.mls.basis = mls::Basis::quadratic;
+  p.options.mls.kappa = 2.5;
+  return p;
+}
+
 struct Assembled {
   std::vector<Real> values;
   Eigen::VectorXd f;
+  bool direct = false;
 };
 
-Assembled assemble_with_threads(int threads, bool vci) {
+Assembled assemble_with_threads(int threads, bool vci, bool long_strip = false) {
   const int saved = omp_get_max_threads();
   omp_set_num_threads(threads);
-  const EfgProblem p = plate();
-  const BackgroundCells cells = make_background_cells(geometry::make_volume_map(p.geometry), {8, 8, 2});
+  const EfgProblem p = long_strip ? strip() : plate();
+  const std::array<int, 3> counts = long_strip ? std::array<int, 3>{40, 4, 2} : std::array<int, 3>{8, 8, 2};
+  const BackgroundCells cells = make_background_cells(geometry::make_volume_map(p.geometry), counts);
   const VolumeQuadrature q = volume_quadrature(cells, {2, 2, 2});
   const mls::MlsShapeFunctions shapes(p.cloud.positions, p.options.mls, p.cloud.spacing);
   std::vector<IndexList> groups;
@@ -67,7 +82,8 @@ Assembled assemble_with_threads(int threads, bool vci) {
   in.body_force = &body;
   in.vci = vci ? &xi : nullptr;
   Assembled out;
-  assemble_volume(in, pattern, out.values, out.f);
+  out.values.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
+  out.direct = assemble_volume(in, pattern, out.values.data(), out.f).direct;
   omp_set_num_threads(saved);
   return out;
 }
@@ -85,7 +101,21 @@ void expect_close(const Assembled& a, const Assembled& b) {
 }
 
 TEST(Determinism, AssemblyOnOneAndTwoThreadsAgrees) {
-  expect_close(assemble_with_threads(1, false), assemble_with_threads(2, false));
+  // 8 x 8 x 2 cells: on 2 threads the halves assembled at the same time share nodes (per-thread copies)
+  const Assembled one = assemble_with_threads(1, false), two = assemble_with_threads(2, false);
+  EXPECT_TRUE(one.direct);
+  EXPECT_FALSE(two.direct);
+  expect_close(one, two);
+}
+
+TEST(Determinism, DirectWritesOnTwoThreadsAgreeWithOneThread) {
+  // a long strip: the cells assembled at the same time are far apart, the threads add in place
+  const Assembled one = assemble_with_threads(1, false, true), two = assemble_with_threads(2, false, true);
+  EXPECT_TRUE(one.direct);
+  EXPECT_TRUE(two.direct);
+  expect_close(one, two);
+  const Assembled again = assemble_with_threads(2, false, true);
+  EXPECT_TRUE(again.values == two.values);
 }
 
 TEST(Determinism, VciAssemblyOnOneAndTwoThreadsAgrees) {

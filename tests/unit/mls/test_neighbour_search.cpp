@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <random>
 
+#include "core/error.hpp"
 #include "mls/mls_shape_functions.hpp"
 #include "mls/nodal_spacing.hpp"
 #include "mls/neighbour_search.hpp"
@@ -124,6 +125,44 @@ TEST(MlsNeighbours, NodeCentredSupportsMatchBruteForce) {
             << to_string(shape) << " " << to_string(mode) << " query " << q;
       }
     }
+}
+
+TEST(MlsNeighbours, PerAxisKappaSetsBoxRadiiAxisByAxis) {
+  const Real h = 0.1;
+  const PointMatrix nodes = jittered_grid({9, 9, 5}, Vec3(h, h, 0.5 * h), 0.2, 3, 11);
+  MlsOptions options;
+  options.kappa_axes = Vec3(3.0, 2.5, 2.0);
+  const Eigen::Matrix3Xd spacing = Eigen::Matrix3Xd::Constant(3, nodes.cols(), h);
+  const MlsShapeFunctions shape_functions(nodes, options, spacing);
+  for (Index i = 0; i < nodes.cols(); ++i)
+    for (int d = 0; d < 3; ++d)
+      EXPECT_NEAR(shape_functions.support_radii()(d, i), options.kappa_axes[d] * h * (1.0 + support_epsilon), 1e-15);
+  const PointMatrix queries = random_points(60, Vec3::Constant(0.1), Vec3(0.7, 0.7, 0.15), 3, 12);
+  for (Index q = 0; q < queries.cols(); ++q) {
+    const ShapeFunctionValues values = shape_functions.evaluate(queries.col(q), 1);
+    EXPECT_EQ(values.neighbours, brute_force_neighbours(shape_functions, queries.col(q))) << "query " << q;
+    EXPECT_NEAR(values.phi.sum(), 1.0, 1e-12);
+  }
+  // a sphere support takes one factor only
+  options.shape = SupportShape::sphere;
+  EXPECT_THROW(MlsShapeFunctions(nodes, options, spacing), InputError);
+}
+
+TEST(MlsNeighbours, NeighbourQueryAloneMatchesTheEvaluation) {
+  const PointMatrix nodes = jittered_grid({10, 8, 6}, Vec3(0.1, 0.1, 0.1), 0.3, 3, 13);
+  const PointMatrix queries = random_points(80, Vec3::Zero(), Vec3(0.9, 0.7, 0.5), 3, 14);
+  for (SupportMode mode : {SupportMode::kappa, SupportMode::nearest, SupportMode::variable}) {
+    MlsOptions options;
+    options.mode = mode;
+    options.kappa = 2.2;
+    options.nearest = 30;
+    const MlsShapeFunctions shape_functions(nodes, options);
+    IndexList alone;
+    for (Index q = 0; q < queries.cols(); ++q) {
+      shape_functions.neighbours(queries.col(q), alone);
+      EXPECT_EQ(alone, shape_functions.evaluate(queries.col(q), 0).neighbours) << to_string(mode) << " query " << q;
+    }
+  }
 }
 
 TEST(MlsNeighbours, PointCentredModesMatchBruteForce) {

@@ -1,0 +1,16 @@
+#pragma once
+// Memory hints for large, freshly allocated arrays.
+//
+// On Linux with transparent huge pages in "madvise" mode (the Debian default), the first touch of a
+// large array faults it in 4 KiB pages, and on virtual machines each fault is expensive (about 10 us
+// measured here: 0.28 s to zero the 94 MB of a 25k-dof EFG matrix). Advising the array for huge pages
+// before its first touch lets the kernel fault it in 2 MiB pages instead.
+#include <cstddef>
+
+namespace lamina {
+
+/// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with huge pages. Call
+/// before the memory is first written. A no-op for small arrays and on systems without madvise.
+void advise_huge_pages(void* data, std::size_t bytes);
+
+}  // namespace lamina
