@@ -256,6 +256,10 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       WY.noalias() = weight.asDiagonal() * Y;
       const Index size = Y.cols();
       out.resize(size, size);
+      if (Y.rows() == 0) {
+        out.setZero();  // no points (Eigen's blocking heuristic divides by the inner dimension)
+        return;
+      }
       if (full) out.noalias() = (in.vci ? Yt : Y).transpose() * WY;
       else out.triangularView<Eigen::Upper>() = Y.transpose() * WY;
     };
