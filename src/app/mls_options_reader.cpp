@@ -12,6 +12,18 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
   if (section.has("gauss_beta")) o.gauss_beta = section.real("gauss_beta", o.gauss_beta, 0.0, 100.0, true);
   o.singular_remedy = section.boolean("singular_remedy", false);
 
+  io::NodeReader interface = section.child("interface");
+  const bool no_interface = interface.defined() && interface.is_scalar() && section.word("interface", {"none"}, "none") == "none";
+  if (interface.defined() && !no_interface && interface.expect_map()) {
+    // {point: [x, y, z], normal: [nx, ny, nz]}: interface enrichment across that plane (or `none`)
+    o.interface_point = interface.vec3("point", std::nullopt);
+    const Vec3 normal = interface.vec3("normal", std::nullopt);
+    if (!(normal.norm() > 0.0)) interface.child("normal").error("a non-zero vector");
+    else o.interface_normal = normal.normalized();
+    o.interface_enrichment = true;
+    interface.reject_unknown_keys();
+  }
+
   io::NodeReader support = section.child("support");
   if (support.defined() && support.expect_map()) {
     // {shape: box|sphere, kappa: k} | {shape: box, kappa: [kx, ky, kz]} | {nearest: N} | {radius: [rx, ry, rz]} | {mode: all|variable, nearest: N, scale: s}

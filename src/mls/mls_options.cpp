@@ -25,6 +25,10 @@ void MlsOptions::validate() const {
           fmt::format("{}", gauss_beta), problems);
   if (mode == SupportMode::kappa)
     require(std::isfinite(kappa) && kappa > 0.0, "kappa", "a positive number", fmt::format("{}", kappa), problems);
+  if (interface_enrichment)
+    require(interface_point.allFinite() && interface_normal.allFinite() && std::abs(interface_normal.norm() - 1.0) < 1e-12,
+            "interface", "a finite point and a unit normal", "a non-finite point or a normal that is not a unit vector",
+            problems);
   if (kappa_axes != Vec3::Zero()) {
     require(mode == SupportMode::kappa && shape == SupportShape::box, "kappa", "a single number for a sphere support",
             "one factor per axis", problems);

@@ -52,6 +52,13 @@ struct MlsOptions {
   /// zero: unused). For example a shorter reach through a plate's thickness than in its plane.
   Vec3 kappa_axes = Vec3::Zero();
   Vec3 radius = Vec3::Zero();               // mode fixed_radius: [rx, ry, rz] (sphere uses radius[0])
+  /// Interface enrichment (Krongauz & Belytschko, CMAME 1998): the basis gets the term |d(y)| with
+  /// d(y) = interface_normal . (y - interface_point), at evaluation points whose support holds nodes on
+  /// both sides of that plane. The approximation stays continuous and can have a kink across the plane
+  /// (a strain jump at a material interface). Elsewhere the polynomial basis is used unchanged.
+  bool interface_enrichment = false;
+  Vec3 interface_point = Vec3::Zero();
+  Vec3 interface_normal = Vec3::UnitZ();     // unit vector
   int nearest = 27;                         // modes nearest / all / variable: N
   Real scale = 1.0;                         // modes nearest / all / variable: radius = scale * distance to N-th
   /// SINCHECK remedy. Radius modes (kappa, fixed_radius, all): the radii used at this evaluation point

@@ -447,10 +447,11 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   return static_cast<Index>(n);
 }
 
-template <int Dim, Basis B>
-void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, ShapeFunctionValues& out) const {
+template <int Dim, Basis B, bool Enriched>
+bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, ShapeFunctionValues& out) const {
   using Polynomial = PolynomialBasis<Dim, B>;
-  constexpr int M = Polynomial::size;
+  constexpr int P = Polynomial::size;           // polynomial terms
+  constexpr int M = P + (Enriched ? 1 : 0);     // + the interface term |d(y)| / rho_n
   using VectorM = Eigen::Matrix<Real, M, 1>;
   using MatrixM = Eigen::Matrix<Real, M, M>;
   using BasisMap = Eigen::Map<Eigen::Matrix<Real, Eigen::Dynamic, M>>;
@@ -471,9 +472,26 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   Vec3 rho;
   Index n = 0;
 
+  // Interface enrichment: signed distance d(y) = n . (y - point), scaled by rho_n = |n| . rho.
+  const Vec3& normal = options_.interface_normal;
+  auto signed_distance = [&](const Vec3& y) { return normal.dot(y - options_.interface_point); };
+  Real rho_n = 1.0;
+
   // Neighbours, weights, basis values and A = sum_I w_I p_I p_I^T; the SINCHECK remedy if enabled.
   for (;;) {
     n = gather<Dim>(x, radius_factor, nearest_count, workspace, rho);
+    if constexpr (Enriched) {
+      // only where the support holds nodes strictly on both sides (elsewhere |d| is affine there: A singular)
+      bool below = false, above = false;
+      const Real tolerance = 1e-9 * rho.head(Dim).maxCoeff();
+      for (Index j = 0; j < n; ++j) {
+        const Real d = signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]));
+        below |= d < -tolerance;
+        above |= d > tolerance;
+      }
+      if (!(below && above)) return false;
+      rho_n = normal.cwiseAbs().dot(rho);
+    }
     bool regular = false;
     Real condition = std::numeric_limits<Real>::infinity();
     if (n >= M) {
@@ -488,12 +506,15 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       for (int d = 0; d < Dim; ++d) inverse_rho[d] = -1.0 / rho[d];
       const Real* offsets = workspace.offsets.data();
       for (Index j = 0; j < n; ++j) {
-        Real z[3], p[M];
+        Real z[3], p[P];
         for (int d = 0; d < Dim; ++d) z[d] = offsets[3 * j + d] * inverse_rho[d];
         Polynomial::values(z, p);
-        for (int k = 0; k < M; ++k) basis(j, k) = p[k];
+        for (int k = 0; k < P; ++k) basis(j, k) = p[k];
+        if constexpr (Enriched)
+          basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
       }
-      moment_matrix<Dim, B>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
+      if constexpr (Enriched) weighted_gram<M>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
+      else moment_matrix<Dim, B>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
       regular = factor.factor(a, options_.max_condition);
       condition = factor.condition();
     }
@@ -501,6 +522,7 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       out.condition = condition;
       break;
     }
+    if constexpr (Enriched) return false;  // the caller falls back to the polynomial basis
     // Nothing more to gain once every node is a neighbour (radius modes) or N = all nodes.
     const bool can_grow = node_centred_mode ? n < node_count() : nearest_count < node_count();
     if (!options_.singular_remedy || step >= options_.remedy_max_steps || !can_grow)
@@ -548,6 +570,23 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   // phi_I = w_I p_I . A^-1 p(x) with p(x) = e_0 in the shifted basis (eqs 1-18, 1-19).
   VectorM unit = VectorM::Zero();
   unit[0] = 1.0;
+  Real distance_x = 0.0;
+  if constexpr (Enriched) {
+    distance_x = signed_distance(x);
+    unit[P] = std::abs(distance_x) / rho_n;
+  }
+  // the basis vector's derivatives at x: polynomial part at the origin, interface term sign(d) n_i / rho_n
+  auto first_derivative = [&](int i) -> VectorM {
+    VectorM g = VectorM::Zero();
+    g.template head<P>() = Polynomial::first_derivative_at_origin(i, rho);
+    if constexpr (Enriched) g[P] = (distance_x > 0.0 ? 1.0 : distance_x < 0.0 ? -1.0 : 0.0) * normal[i] / rho_n;
+    return g;
+  };
+  auto second_derivative = [&](int k) -> VectorM {
+    VectorM g = VectorM::Zero();
+    g.template head<P>() = Polynomial::second_derivative_at_origin(k, rho);
+    return g;
+  };
   const VectorM r = solve(prepare(unit));
   basis_times<M>(basis, r, projection);
   out.neighbours.assign(workspace.indices.begin(), workspace.indices.end());
@@ -555,7 +594,7 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   if (derivative_order < 1) {
     out.dphi.resize(3, 0);
     out.ddphi.resize(6, 0);
-    return;
+    return true;
   }
 
   // First derivatives (eq 1-20): phi_I,i = w_I,i p_I.r + w_I p_I.r_,i with
@@ -563,7 +602,7 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   out.dphi.setZero(3, n);
   for (int i = 0; i < Dim; ++i) {
     combined = weight(1 + i).cwiseProduct(projection);
-    const VectorM right = prepare(Polynomial::first_derivative_at_origin(i, rho)) - basis_transpose_times<M>(basis, combined);
+    const VectorM right = prepare(first_derivative(i)) - basis_transpose_times<M>(basis, combined);
     const VectorM r_first = solve(right);
     auto t = first_projection(i);
     basis_times<M>(basis, r_first, t);
@@ -571,7 +610,7 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   }
   if (derivative_order < 2) {
     out.ddphi.resize(6, 0);
-    return;
+    return true;
   }
 
   // Second derivatives (eq 1-21): r_,ij = A^-1 (p_,ij - A_,i r_,j - A_,j r_,i - A_,ij r);
@@ -585,11 +624,12 @@ void MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     if (i >= Dim || l >= Dim) continue;
     combined = weight(4 + k).cwiseProduct(projection) + weight(1 + i).cwiseProduct(first_projection(l)) +
                weight(1 + l).cwiseProduct(first_projection(i));
-    const VectorM right = prepare(Polynomial::second_derivative_at_origin(k, rho)) - basis_transpose_times<M>(basis, combined);
+    const VectorM right = prepare(second_derivative(k)) - basis_transpose_times<M>(basis, combined);
     const VectorM r_second = solve(right);
     basis_times<M>(basis, r_second, u);
     out.ddphi.row(k) = (combined + weight(0).cwiseProduct(u)).transpose();
   }
+  return true;
 }
 
 void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real condition) const {
@@ -637,18 +677,33 @@ void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunct
   if (derivative_order < 0 || derivative_order > 2)
     throw std::invalid_argument(fmt::format("MLS derivative order must be 0, 1 or 2, got {}", derivative_order));
   const bool linear = options_.basis == Basis::linear;
+  // interface enrichment where the support may cross the interface plane
+  bool enrich = false;
+  if (options_.interface_enrichment) {
+    const Real reach = node_centred() ? options_.interface_normal.cwiseAbs().dot(max_radius_) : std::numeric_limits<Real>::infinity();
+    enrich = std::abs(options_.interface_normal.dot(x - options_.interface_point)) < reach;
+  }
   switch (options_.dimension) {
     case 1:
-      linear ? evaluate_kernel<1, Basis::linear>(x, derivative_order, out)
-             : evaluate_kernel<1, Basis::quadratic>(x, derivative_order, out);
+      if (enrich && (linear ? evaluate_kernel<1, Basis::linear, true>(x, derivative_order, out)
+                            : evaluate_kernel<1, Basis::quadratic, true>(x, derivative_order, out)))
+        return;
+      linear ? evaluate_kernel<1, Basis::linear, false>(x, derivative_order, out)
+             : evaluate_kernel<1, Basis::quadratic, false>(x, derivative_order, out);
       break;
     case 2:
-      linear ? evaluate_kernel<2, Basis::linear>(x, derivative_order, out)
-             : evaluate_kernel<2, Basis::quadratic>(x, derivative_order, out);
+      if (enrich && (linear ? evaluate_kernel<2, Basis::linear, true>(x, derivative_order, out)
+                            : evaluate_kernel<2, Basis::quadratic, true>(x, derivative_order, out)))
+        return;
+      linear ? evaluate_kernel<2, Basis::linear, false>(x, derivative_order, out)
+             : evaluate_kernel<2, Basis::quadratic, false>(x, derivative_order, out);
       break;
     default:
-      linear ? evaluate_kernel<3, Basis::linear>(x, derivative_order, out)
-             : evaluate_kernel<3, Basis::quadratic>(x, derivative_order, out);
+      if (enrich && (linear ? evaluate_kernel<3, Basis::linear, true>(x, derivative_order, out)
+                            : evaluate_kernel<3, Basis::quadratic, true>(x, derivative_order, out)))
+        return;
+      linear ? evaluate_kernel<3, Basis::linear, false>(x, derivative_order, out)
+             : evaluate_kernel<3, Basis::quadratic, false>(x, derivative_order, out);
       break;
   }
 }

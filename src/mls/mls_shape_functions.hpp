@@ -89,8 +89,11 @@ class MlsShapeFunctions {
   const CellList& cell_list() const { return cells_; }
 
  private:
-  template <int Dim, Basis B>
-  void evaluate_kernel(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
+  /// Enriched: the basis gets the interface term (MlsOptions::interface_enrichment); returns false,
+  /// leaving `out` unspecified, where the support does not hold nodes on both sides of the interface or
+  /// the enriched moment matrix is ill-conditioned (the caller then uses the polynomial basis).
+  template <int Dim, Basis B, bool Enriched>
+  bool evaluate_kernel(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
   bool node_centred() const;
   /// Fills workspace.indices (sorted), .offsets (x - x_I) and .inverse_radii of the neighbours of x
   /// (x already projected), radii multiplied by radius_factor, N = nearest_count; sets rho (basis scale).
