@@ -14,7 +14,8 @@ namespace lamina::mls {
 Real mean_nodal_spacing(const PointMatrix& nodes, int dimension) {
   if (nodes.cols() == 0) return 0.0;
   const Vec3 extent = nodes.rowwise().maxCoeff() - nodes.rowwise().minCoeff();
-  const Real largest = extent.head(dimension).maxCoeff();
+  Real largest = 0.0;  // (a loop: head(dimension) of a Vec3 draws a false -Warray-bounds from GCC 12 with AVX)
+  for (int d = 0; d < dimension; ++d) largest = std::max(largest, extent[d]);
   Real volume = 1.0;
   int axes = 0;
   for (int d = 0; d < dimension; ++d) {

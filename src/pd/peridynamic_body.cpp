@@ -258,9 +258,16 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
   };
   auto omega = [&](Index b) { return options_.influence == Influence::one ? 1.0 : delta / length_[b]; };
   auto phi = [&](const Vec3& nv) {
+    // element by element: assigning the fixed-size result to a dynamic vector drew a false
+    // -Warray-bounds (a 4-wide AVX load of 3 values on a path the size check excludes) from GCC 12
     Eigen::VectorXd p(monomials);
-    if (dim == 3) p = quartic_monomials<3>(nv);
-    else p = quartic_monomials<2>(nv);
+    if (dim == 3) {
+      const auto q = quartic_monomials<3>(nv);
+      for (int k = 0; k < q.size(); ++k) p[k] = q[k];
+    } else {
+      const auto q = quartic_monomials<2>(nv);
+      for (int k = 0; k < q.size(); ++k) p[k] = q[k];
+    }
     return p;
   };
   // Pass 1: moments of every family.

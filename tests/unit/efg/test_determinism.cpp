@@ -4,6 +4,7 @@
 // solution up to the conditioning of the system.
 #include <gtest/gtest.h>
 #include <array>
+#include <cmath>
 #include <omp.h>
 
 #include "efg/galerkin_assembly.hpp"
@@ -120,6 +121,47 @@ TEST(Determinism, DirectWritesOnTwoThreadsAgreeWithOneThread) {
 
 TEST(Determinism, VciAssemblyOnOneAndTwoThreadsAgrees) {
   expect_close(assemble_with_threads(1, true), assemble_with_threads(2, true));
+}
+
+TEST(Determinism, AReducedRuleWithAnEmptyCellAddsNothingThere) {
+  // selective reduced integration where one cell has no reduced point: the cell's lambda part is zero
+  // (Eigen's triangular product divides by the inner dimension: this used to raise SIGFPE)
+  const EfgProblem p = plate();
+  const BackgroundCells cells = make_background_cells(geometry::make_volume_map(p.geometry), {8, 8, 2});
+  const VolumeQuadrature q = volume_quadrature(cells, {2, 2, 2});
+  const VolumeQuadrature one_point = volume_quadrature(cells, {1, 1, 1});
+  VolumeQuadrature reduced = one_point;  // drop the point of cell 0
+  reduced.points = one_point.points.rightCols(one_point.size() - 1);
+  reduced.weights = one_point.weights.tail(one_point.size() - 1);
+  for (std::size_t c = 1; c < reduced.cell_begin.size(); ++c) reduced.cell_begin[c] = one_point.cell_begin[c] - 1;
+  reduced.cell_begin[0] = 0;
+  const mls::MlsShapeFunctions shapes(p.cloud.positions, p.options.mls, p.cloud.spacing);
+  std::vector<IndexList> groups;
+  const auto cell_nodes = cell_neighbours(shapes, q, nullptr, &groups);
+  const solve::BlockPattern pattern(p.cloud.size(), 3, groups, true);
+  const std::vector<int> material(static_cast<std::size_t>(q.size()), 0), reduced_material(static_cast<std::size_t>(reduced.size()), 0);
+  const std::vector<material::LinearElastic> materials{p.materials[0].elastic};
+  VolumeAssembly in;
+  in.shapes = &shapes;
+  in.quadrature = &q;
+  in.cell_nodes = &cell_nodes;
+  in.material_of_point = &material;
+  in.materials = &materials;
+  in.reduced = &reduced;
+  in.material_of_reduced_point = &reduced_material;
+  std::vector<Real> values(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
+  Eigen::VectorXd f;
+  EXPECT_NO_THROW(assemble_volume(in, pattern, values.data(), f));
+  for (const Real v : values) ASSERT_TRUE(std::isfinite(v));
+  // the full one-point rule adds a positive lambda part to the diagonal of a node of cell 0
+  std::vector<Real> full(values.size(), 0.0);
+  in.reduced = &one_point;
+  const std::vector<int> one_point_material(static_cast<std::size_t>(one_point.size()), 0);
+  in.material_of_reduced_point = &one_point_material;
+  assemble_volume(in, pattern, full.data(), f);
+  const Index corner = cell_nodes[0].front();
+  const Index diagonal = pattern.position(3 * corner, 3 * corner);
+  EXPECT_GT(full[static_cast<std::size_t>(diagonal)], values[static_cast<std::size_t>(diagonal)]);
 }
 
 TEST(Determinism, RepeatedAssemblyIsBitwiseIdentical) {

@@ -144,9 +144,11 @@ TEST(BoundaryQuadrature, AreaAndClosedSurfaceOfTheCurvedBeam) {
   for (Index i = 0; i < s.size(); ++i) closed += s.weights[i] * s.normals.col(i);
   EXPECT_LT(closed.norm(), 1e-8);
   // the inner face (r = 3) has normals pointing to the origin
-  for (Index i = 0; i < s.size(); ++i)
-    if (s.face[static_cast<std::size_t>(i)] == 0)
+  for (Index i = 0; i < s.size(); ++i) {
+    if (s.face[static_cast<std::size_t>(i)] == 0) {
       EXPECT_LT(s.normals.col(i).dot(Vec3(s.points(0, i), s.points(1, i), 0)), 0.0);
+    }
+  }
 }
 
 TEST(BoundaryQuadrature, RefinedSelectionResolvesAPatchInsideACell) {
