@@ -673,10 +673,20 @@ void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real con
   throw SingularMomentMatrix(message, x, neighbours, basis_size_, condition);
 }
 
+template <int Dim>
+void MlsShapeFunctions::evaluate_dimension(const Vec3& x, int derivative_order, bool enrich, ShapeFunctionValues& out) const {
+  if (options_.basis == Basis::linear) {
+    if (!enrich || !evaluate_kernel<Dim, Basis::linear, true>(x, derivative_order, out))
+      evaluate_kernel<Dim, Basis::linear, false>(x, derivative_order, out);
+  } else {
+    if (!enrich || !evaluate_kernel<Dim, Basis::quadratic, true>(x, derivative_order, out))
+      evaluate_kernel<Dim, Basis::quadratic, false>(x, derivative_order, out);
+  }
+}
+
 void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const {
   if (derivative_order < 0 || derivative_order > 2)
     throw std::invalid_argument(fmt::format("MLS derivative order must be 0, 1 or 2, got {}", derivative_order));
-  const bool linear = options_.basis == Basis::linear;
   // interface enrichment where the support may cross the interface plane
   bool enrich = false;
   if (options_.interface_enrichment) {
@@ -684,27 +694,9 @@ void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunct
     enrich = std::abs(options_.interface_normal.dot(x - options_.interface_point)) < reach;
   }
   switch (options_.dimension) {
-    case 1:
-      if (enrich && (linear ? evaluate_kernel<1, Basis::linear, true>(x, derivative_order, out)
-                            : evaluate_kernel<1, Basis::quadratic, true>(x, derivative_order, out)))
-        return;
-      linear ? evaluate_kernel<1, Basis::linear, false>(x, derivative_order, out)
-             : evaluate_kernel<1, Basis::quadratic, false>(x, derivative_order, out);
-      break;
-    case 2:
-      if (enrich && (linear ? evaluate_kernel<2, Basis::linear, true>(x, derivative_order, out)
-                            : evaluate_kernel<2, Basis::quadratic, true>(x, derivative_order, out)))
-        return;
-      linear ? evaluate_kernel<2, Basis::linear, false>(x, derivative_order, out)
-             : evaluate_kernel<2, Basis::quadratic, false>(x, derivative_order, out);
-      break;
-    default:
-      if (enrich && (linear ? evaluate_kernel<3, Basis::linear, true>(x, derivative_order, out)
-                            : evaluate_kernel<3, Basis::quadratic, true>(x, derivative_order, out)))
-        return;
-      linear ? evaluate_kernel<3, Basis::linear, false>(x, derivative_order, out)
-             : evaluate_kernel<3, Basis::quadratic, false>(x, derivative_order, out);
-      break;
+    case 1: return evaluate_dimension<1>(x, derivative_order, enrich, out);
+    case 2: return evaluate_dimension<2>(x, derivative_order, enrich, out);
+    default: return evaluate_dimension<3>(x, derivative_order, enrich, out);
   }
 }
 

@@ -92,6 +92,9 @@ class MlsShapeFunctions {
   /// Enriched: the basis gets the interface term (MlsOptions::interface_enrichment); returns false,
   /// leaving `out` unspecified, where the support does not hold nodes on both sides of the interface or
   /// the enriched moment matrix is ill-conditioned (the caller then uses the polynomial basis).
+  /// The kernel for the options' basis in Dim dimensions, enriched first if `enrich`.
+  template <int Dim>
+  void evaluate_dimension(const Vec3& x, int derivative_order, bool enrich, ShapeFunctionValues& out) const;
   template <int Dim, Basis B, bool Enriched>
   bool evaluate_kernel(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
   bool node_centred() const;

@@ -56,35 +56,58 @@ struct Assembled {
   bool direct = false;
 };
 
+/// A problem with its 2 x 2 x 2 Gauss rule, shape functions, cell neighbour lists and sparsity pattern,
+/// ready for assemble_volume (one material; VCI correction xi with a zero boundary term if vci).
+struct AssemblySetup {
+  EfgProblem problem;
+  BackgroundCells cells;
+  VolumeQuadrature quadrature;
+  mls::MlsShapeFunctions shapes;
+  std::vector<IndexList> cell_nodes;
+  solve::BlockPattern pattern;
+  Eigen::Matrix3Xd xi;
+  std::vector<int> material;
+  std::vector<material::LinearElastic> materials;
+
+  AssemblySetup(EfgProblem p, const std::array<int, 3>& counts, bool vci)
+      : problem(std::move(p)),
+        cells(make_background_cells(geometry::make_volume_map(problem.geometry), counts)),
+        quadrature(volume_quadrature(cells, {2, 2, 2})),
+        shapes(problem.cloud.positions, problem.options.mls, problem.cloud.spacing),
+        material(static_cast<std::size_t>(quadrature.size()), 0),
+        materials{problem.materials[0].elastic} {
+    std::vector<IndexList> groups;
+    VolumeIntegrals integrals;
+    cell_nodes = cell_neighbours(shapes, quadrature, vci ? &integrals : nullptr, &groups);
+    pattern = solve::BlockPattern(problem.cloud.size(), 3, groups, !vci);
+    if (vci) xi = vci_correction(integrals, Eigen::Matrix3Xd::Zero(3, problem.cloud.size()));
+  }
+
+  VolumeAssembly input() const {
+    VolumeAssembly in;
+    in.shapes = &shapes;
+    in.quadrature = &quadrature;
+    in.cell_nodes = &cell_nodes;
+    in.material_of_point = &material;
+    in.materials = &materials;
+    in.vci = xi.cols() > 0 ? &xi : nullptr;
+    return in;
+  }
+};
+
 Assembled assemble_with_threads(int threads, bool vci, bool long_strip = false) {
   const int saved = omp_get_max_threads();
   omp_set_num_threads(threads);
-  const EfgProblem p = long_strip ? strip() : plate();
-  const std::array<int, 3> counts = long_strip ? std::array<int, 3>{40, 4, 2} : std::array<int, 3>{8, 8, 2};
-  const BackgroundCells cells = make_background_cells(geometry::make_volume_map(p.geometry), counts);
-  const VolumeQuadrature q = volume_quadrature(cells, {2, 2, 2});
-  const mls::MlsShapeFunctions shapes(p.cloud.positions, p.options.mls, p.cloud.spacing);
-  std::vector<IndexList> groups;
-  VolumeIntegrals integrals;
-  const auto cell_nodes = cell_neighbours(shapes, q, vci ? &integrals : nullptr, &groups);
-  const solve::BlockPattern pattern(p.cloud.size(), 3, groups, !vci);
-  Eigen::Matrix3Xd xi = vci ? Eigen::Matrix3Xd(vci_correction(integrals, Eigen::Matrix3Xd::Zero(3, p.cloud.size())))
-                            : Eigen::Matrix3Xd();
-  const std::vector<int> material(static_cast<std::size_t>(q.size()), 0);
-  const std::vector<material::LinearElastic> materials{p.materials[0].elastic};
+  const AssemblySetup setup(long_strip ? strip() : plate(),
+                            long_strip ? std::array<int, 3>{40, 4, 2} : std::array<int, 3>{8, 8, 2}, vci);
+  const VolumeQuadrature& q = setup.quadrature;
   Eigen::Matrix3Xd body = Eigen::Matrix3Xd::Zero(3, q.size());
   for (Index i = 0; i < q.size(); ++i) body(2, i) = -1 - 0.1 * q.points(0, i);
-  VolumeAssembly in;
-  in.shapes = &shapes;
-  in.quadrature = &q;
-  in.cell_nodes = &cell_nodes;
-  in.material_of_point = &material;
-  in.materials = &materials;
+  VolumeAssembly in = setup.input();
   in.body_force = &body;
-  in.vci = vci ? &xi : nullptr;
   Assembled out;
-  out.values.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
-  out.direct = assemble_volume(in, pattern, out.values.data(), out.f).direct;
+  out.values.assign(static_cast<std::size_t>(setup.pattern.nonzeros()), 0.0);
+  out.direct = assemble_volume(in, setup.pattern, out.values.data(), out.f).direct;
   omp_set_num_threads(saved);
   return out;
 }
@@ -126,27 +149,16 @@ TEST(Determinism, VciAssemblyOnOneAndTwoThreadsAgrees) {
 TEST(Determinism, AReducedRuleWithAnEmptyCellAddsNothingThere) {
   // selective reduced integration where one cell has no reduced point: the cell's lambda part is zero
   // (Eigen's triangular product divides by the inner dimension: this used to raise SIGFPE)
-  const EfgProblem p = plate();
-  const BackgroundCells cells = make_background_cells(geometry::make_volume_map(p.geometry), {8, 8, 2});
-  const VolumeQuadrature q = volume_quadrature(cells, {2, 2, 2});
-  const VolumeQuadrature one_point = volume_quadrature(cells, {1, 1, 1});
+  const AssemblySetup setup(plate(), {8, 8, 2}, false);
+  const solve::BlockPattern& pattern = setup.pattern;
+  const VolumeQuadrature one_point = volume_quadrature(setup.cells, {1, 1, 1});
   VolumeQuadrature reduced = one_point;  // drop the point of cell 0
   reduced.points = one_point.points.rightCols(one_point.size() - 1);
   reduced.weights = one_point.weights.tail(one_point.size() - 1);
   for (std::size_t c = 1; c < reduced.cell_begin.size(); ++c) reduced.cell_begin[c] = one_point.cell_begin[c] - 1;
   reduced.cell_begin[0] = 0;
-  const mls::MlsShapeFunctions shapes(p.cloud.positions, p.options.mls, p.cloud.spacing);
-  std::vector<IndexList> groups;
-  const auto cell_nodes = cell_neighbours(shapes, q, nullptr, &groups);
-  const solve::BlockPattern pattern(p.cloud.size(), 3, groups, true);
-  const std::vector<int> material(static_cast<std::size_t>(q.size()), 0), reduced_material(static_cast<std::size_t>(reduced.size()), 0);
-  const std::vector<material::LinearElastic> materials{p.materials[0].elastic};
-  VolumeAssembly in;
-  in.shapes = &shapes;
-  in.quadrature = &q;
-  in.cell_nodes = &cell_nodes;
-  in.material_of_point = &material;
-  in.materials = &materials;
+  const std::vector<int> reduced_material(static_cast<std::size_t>(reduced.size()), 0);
+  VolumeAssembly in = setup.input();
   in.reduced = &reduced;
   in.material_of_reduced_point = &reduced_material;
   std::vector<Real> values(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
@@ -159,7 +171,7 @@ TEST(Determinism, AReducedRuleWithAnEmptyCellAddsNothingThere) {
   const std::vector<int> one_point_material(static_cast<std::size_t>(one_point.size()), 0);
   in.material_of_reduced_point = &one_point_material;
   assemble_volume(in, pattern, full.data(), f);
-  const Index corner = cell_nodes[0].front();
+  const Index corner = setup.cell_nodes[0].front();
   const Index diagonal = pattern.position(3 * corner, 3 * corner);
   EXPECT_GT(full[static_cast<std::size_t>(diagonal)], values[static_cast<std::size_t>(diagonal)]);
 }
