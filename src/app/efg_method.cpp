@@ -91,8 +91,27 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
         o.gauss = {g, g, g};
       }
     }
-    const std::string volumetric = integration.word("volumetric", {"full", "reduced"}, "full");
+    const std::string volumetric = integration.word("volumetric", {"full", "reduced", "projected"}, "full");
     o.reduced_volumetric = volumetric == "reduced";
+    o.projected_volumetric = volumetric == "projected";
+    if (integration.has("pressure_kappa")) {
+      if (!o.projected_volumetric) integration.child("pressure_kappa").error("no pressure_kappa unless volumetric: projected", "pressure_kappa with volumetric: " + volumetric);
+      else o.pressure_kappa = integration.real("pressure_kappa", 1.1, 1.0, 10.0, true);
+    }
+    io::NodeReader pressure_nodes = integration.child("pressure_nodes");
+    if (pressure_nodes.defined()) {
+      if (!o.projected_volumetric) pressure_nodes.error("no pressure_nodes unless volumetric: projected", "pressure_nodes with volumetric: " + volumetric);
+      else if (auto v = pressure_nodes.as_integers(3)) {
+        std::array<int, 3> counts{};
+        bool ok = true;
+        for (int d = 0; d < 3; ++d) {
+          if ((*v)[static_cast<std::size_t>(d)] < 2 || (*v)[static_cast<std::size_t>(d)] > 100000) ok = false;
+          counts[static_cast<std::size_t>(d)] = static_cast<int>((*v)[static_cast<std::size_t>(d)]);
+        }
+        if (ok) o.pressure_nodes = counts;
+        else pressure_nodes.error("three node counts between 2 and 100000");
+      }
+    }
     for (int d = 0; d < 3; ++d) o.volumetric_gauss[static_cast<std::size_t>(d)] = std::max(o.gauss[static_cast<std::size_t>(d)] - 1, 1);
     if (integration.has("volumetric_gauss")) {
       const int g = static_cast<int>(integration.integer("volumetric_gauss", 1, 1, 20));

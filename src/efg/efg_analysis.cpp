@@ -125,6 +125,21 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes)
   for (std::size_t i = 0; i < problem_.materials.size(); ++i) {
     problem_.materials[i].elastic.validate(fmt::format("materials.{}", i));
     materials_.push_back(problem_.materials[i].elastic);
+    // the mu part alone: E' = 2 mu, nu' = 0 gives lambda' = 0, mu' = mu
+    deviatoric_materials_.push_back(material::LinearElastic{2.0 * materials_.back().mu(), 0.0});
+  }
+  if (problem_.options.projected_volumetric) {
+    if (problem_.options.formulation != Formulation::galerkin)
+      throw InputError("efg.integration.volumetric", "full with a strong-form formulation (projected is a Galerkin option)",
+                       "projected");
+    if (problem_.options.essential == EssentialMethod::nitsche)
+      throw InputError("efg.essential_bc",
+                       "penalty, penalty_nodes or lagrange with volumetric: projected (Nitsche's consistency term "
+                       "uses the unprojected stress)",
+                       "nitsche");
+    if (problem_.options.correction == IntegrationCorrection::vci)
+      throw InputError("efg.integration.correction", "none with volumetric: projected (VCI is not combined with it)",
+                       "vci");
   }
   if (problem_.options.formulation != Formulation::galerkin) {
     const std::string name = to_string(problem_.options.formulation);
@@ -190,6 +205,30 @@ void EfgAnalysis::setup() {
   node_search_ = std::make_unique<mls::CellList>(cloud.positions, std::max(size / std::cbrt(static_cast<Real>(n)), 1e-12));
   Eigen::Matrix3Xd spacing = cloud.spacing.cols() == n ? cloud.spacing : Eigen::Matrix3Xd();
   shapes_ = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, problem_.options.mls, spacing);
+  if (problem_.options.projected_volumetric) {
+    // pressure functions: a linear MLS partition of unity with a small box support
+    mls::MlsOptions pressure = problem_.options.mls;
+    pressure.basis = mls::Basis::linear;
+    pressure.shape = mls::SupportShape::box;
+    pressure.mode = mls::SupportMode::kappa;
+    pressure.kappa = problem_.options.pressure_kappa;
+    pressure.kappa_axes = Vec3::Zero();
+    pressure.interface_enrichment = false;
+    std::optional<std::array<int, 3>> pressure_counts = problem_.options.pressure_nodes;
+    if (!pressure_counts && cloud.counts[0] > 1 && cloud.counts[1] > 1 && cloud.counts[2] > 1) {
+      pressure_counts = std::array<int, 3>{};
+      for (int d = 0; d < 3; ++d)
+        (*pressure_counts)[static_cast<std::size_t>(d)] = static_cast<int>(cloud.counts[static_cast<std::size_t>(d)] / 2 + 1);
+    }
+    if (pressure_counts) {
+      const PointCloud coarse = geometry::generate_volume_nodes(problem_.geometry, *pressure_counts);
+      timings_["pressure_nodes"] = static_cast<Real>(coarse.size());
+      pressure_shapes_ = std::make_unique<mls::MlsShapeFunctions>(coarse.positions, pressure,
+                                                                 coarse.spacing.cols() == coarse.size() ? coarse.spacing : Eigen::Matrix3Xd());
+    } else {
+      pressure_shapes_ = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, pressure, spacing);
+    }
+  }
 
   for (const auto& m : problem_.materials)
     material_tests_.push_back(m.region ? std::make_unique<RegionTest>(*m.region, &cells_->map,
@@ -391,6 +430,18 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
   timings_["neighbours_s"] = seconds_since(start);
   progress(0.2, "neighbours");
 
+  // projected volumetric term (efg.integration.volumetric: projected): G, M and lambda per pressure node
+  const bool projected = problem_.options.projected_volumetric;
+  if (projected) {
+    start = Clock::now();
+    Eigen::VectorXd lambda(volume_.size());
+    for (Index q = 0; q < volume_.size(); ++q)
+      lambda[q] = materials_[static_cast<std::size_t>(material_of_point_[static_cast<std::size_t>(q)])].lambda();
+    projection_ = std::make_unique<ProjectedVolumetric>(project_volumetric(*shapes_, *pressure_shapes_, volume_, lambda));
+    for (const auto& list : projection_->nodes) groups.push_back(list);
+    timings_["projection_s"] = seconds_since(start);
+  }
+
   // shape functions at the constraint points
   start = Clock::now();
   PointMatrix constraint_x(3, static_cast<Index>(constraint_points_.size()));
@@ -417,7 +468,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
   input.quadrature = &volume_;
   input.cell_nodes = &cell_nodes;
   input.material_of_point = &material_of_point_;
-  input.materials = &materials_;
+  input.materials = projected ? &deviatoric_materials_ : &materials_;
   input.body_force = body_force_.cols() == volume_.size() ? &body_force_ : nullptr;
   input.vci = vci ? &xi : nullptr;
   if (reduced) {
@@ -466,17 +517,26 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
     // diagonal: a nearly incompressible body would otherwise get a penalty ~ lambda and lock at the
     // constrained faces
     Real stiffest = 0.0, ratio = 1.0;
-    for (const auto& m : materials_)
+    for (std::size_t i = 0; i < materials_.size(); ++i) {
+      const auto& m = materials_[i];
+      const Real assembled = projected ? deviatoric_materials_[i].p_wave_modulus() : m.p_wave_modulus();
       if (m.p_wave_modulus() > stiffest) {
         stiffest = m.p_wave_modulus();
-        ratio = m.E / m.p_wave_modulus();
+        ratio = m.E / assembled;
       }
+    }
     max_diagonal *= ratio;
     alpha_surface_ = options.penalty ? *options.penalty : (s_max > 0 ? options.penalty_factor * max_diagonal / s_max : 0.0);
     alpha_point_ = options.penalty ? *options.penalty : (p_max > 0 ? options.penalty_factor * max_diagonal / p_max : 0.0);
   }
   timings_["penalty_surface"] = alpha_surface_;
   timings_["penalty_point"] = alpha_point_;
+  // after the penalty scale, which is taken from the mu part (a lambda-sized penalty locks the constrained faces)
+  if (projected) {
+    const auto projection_start = Clock::now();
+    projection_->add_stiffness(pattern, values);  // K += G^T diag(lambda_I / M_I) G
+    timings_["projection_s"] += seconds_since(projection_start);
+  }
 
   // constraint terms
   Eigen::MatrixXd Kc;
@@ -517,7 +577,8 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
     }
   }
   timings_["assembly_boundary_s"] = seconds_since(start);
-  timings_["assembly_s"] = timings_["neighbours_s"] + timings_["pattern_s"] + volume_seconds + timings_["assembly_boundary_s"];
+  timings_["assembly_s"] = timings_["neighbours_s"] + timings_["pattern_s"] + volume_seconds + timings_["assembly_boundary_s"] +
+                          (projected ? timings_["projection_s"] : 0.0);
   progress(0.7, "solving");
 
   // solve
@@ -592,6 +653,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
     reactions_[i] = r;
   }
   energy_internal_ = 0.5 * (u_.dot(Ku) - constraint_energy);
+  if (projection_) nodal_pressure_ = projection_->lambda.cwiseProduct(projection_->nodal_divergence(u_));
   Real reaction_work = 0.0;
   for (std::size_t i = 0; i < constraint_points_.size(); ++i) reaction_work += reactions_[i].dot(constraint_points_[i].value);
   energy_external_ = 0.5 * (f_loads_.dot(u_) + reaction_work);
@@ -617,7 +679,7 @@ void EfgAnalysis::postprocess() {
     node_displacement_.col(i) = value_of(sv, u_);
     const material::Voigt e = material::strain_from_gradient(gradient_of(sv, u_));
     node_strain_.col(i) = e;
-    node_stress_.col(i) = materials_[static_cast<std::size_t>(node_material_[static_cast<std::size_t>(i)])].stress(e);
+    node_stress_.col(i) = stress_of(node_material_[static_cast<std::size_t>(i)], e, problem_.cloud.positions.col(i));
   }
   if (problem_.options.exact_displacement) {
     const auto& exact = *problem_.options.exact_displacement;
@@ -634,7 +696,7 @@ void EfgAnalysis::postprocess() {
         G.row(a) = d.gradient.transpose();
       }
       const material::Voigt se = materials_[static_cast<std::size_t>(node_material_[static_cast<std::size_t>(i)])].stress(
-          material::strain_from_gradient(G));
+          material::strain_from_gradient(G));  // the exact stress (full lambda tr eps)
       du = std::max(du, (node_displacement_.col(i) - ue).norm());
       umax = std::max(umax, ue.norm());
       ds = std::max(ds, (node_stress_.col(i) - se).norm());
@@ -704,7 +766,19 @@ material::Voigt EfgAnalysis::strain_at(const Vec3& x) const {
 material::Voigt EfgAnalysis::stress_at(const Vec3& x) const {
   int m = material_at(x);
   if (m < 0) m = node_material_.empty() ? 0 : node_material_[static_cast<std::size_t>(nearest_node(x))];
-  return materials_[static_cast<std::size_t>(m)].stress(strain_at(x));
+  return stress_of(m, strain_at(x), x);
+}
+
+material::Voigt EfgAnalysis::stress_of(int m, const material::Voigt& strain, const Vec3& x) const {
+  if (!projection_ || nodal_pressure_.size() == 0) return materials_[static_cast<std::size_t>(m)].stress(strain);
+  // sigma = 2 mu eps + p I with the projected pressure p(x) = sum_I psi_I(x) lambda_I theta_I
+  material::Voigt s = deviatoric_materials_[static_cast<std::size_t>(m)].stress(strain);
+  mls::ShapeFunctionValues pv;
+  pressure_shapes_->evaluate(x, 0, pv);
+  Real p = 0.0;
+  for (std::size_t k = 0; k < pv.neighbours.size(); ++k) p += pv.phi[static_cast<Index>(k)] * nodal_pressure_[pv.neighbours[k]];
+  s.head<3>().array() += p;
+  return s;
 }
 
 Vec3 EfgAnalysis::reaction(const IndexList& nodes) const {

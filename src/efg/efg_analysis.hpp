@@ -35,6 +35,7 @@
 #include "efg/essential_boundary.hpp"
 #include "efg/region_test.hpp"
 #include "efg/strong_form_residuals.hpp"
+#include "efg/volumetric_projection.hpp"
 #include "mls/mls_shape_functions.hpp"
 #include "mls/neighbour_search.hpp"
 #include "solve/sparse_linear_solver.hpp"
@@ -87,6 +88,8 @@ class EfgAnalysis : public Analysis {
   void strong_form_reactions_and_energies();
   void postprocess();
   int material_at(const Vec3& x) const;
+  /// Stress of material m from the strain at x (with the projected pressure when projected).
+  material::Voigt stress_of(int m, const material::Voigt& strain, const Vec3& x) const;
   Index nearest_node(const Vec3& x) const;
   Real field_probe(const Probe& probe) const;
 
@@ -100,6 +103,11 @@ class EfgAnalysis : public Analysis {
   std::vector<int> material_of_point_;
   std::vector<int> material_of_reduced_point_;
   std::unique_ptr<mls::MlsShapeFunctions> shapes_;
+  // projected volumetric term (efg.integration.volumetric: projected)
+  std::unique_ptr<mls::MlsShapeFunctions> pressure_shapes_;
+  std::unique_ptr<ProjectedVolumetric> projection_;
+  std::vector<material::LinearElastic> deviatoric_materials_;  // lambda = 0, same mu
+  Eigen::VectorXd nodal_pressure_;           // lambda_I theta_I per node (projected only)
   std::unique_ptr<mls::CellList> node_search_;
   std::vector<std::unique_ptr<RegionTest>> material_tests_;
   std::vector<ConstraintPoint> constraint_points_;

@@ -73,6 +73,12 @@ struct EfgOptions {
   IntegrationCorrection correction = IntegrationCorrection::none;
   bool reduced_volumetric = false;              // selective reduced integration of the lambda term
   std::array<int, 3> volumetric_gauss{1, 1, 1}; // its Gauss order (default: gauss - 1, at least 1)
+  bool projected_volumetric = false;            // lambda term with the divergence projected on nodal pressures
+  Real pressure_kappa = 1.1;                    // support of the linear-MLS pressure functions (box, x spacing)
+  /// Pressure nodes per direction, generated on the same body (none: every other displacement node,
+  /// n / 2 + 1 per direction, as the vertices of Taylor-Hood Q2/Q1 elements; the displacement nodes
+  /// themselves if they are not a structured grid).
+  std::optional<std::array<int, 3>> pressure_nodes;
   EssentialMethod essential = EssentialMethod::penalty;
   std::optional<Real> penalty;                  // absolute penalty value (none: penalty_factor x stiffness scale)
   Real penalty_factor = 1e5;
