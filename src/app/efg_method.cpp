@@ -14,6 +14,22 @@ struct EfgMethodOptions : MethodOptions {
   efg::EfgOptions options;
 };
 
+/// Three counts per direction, each in [lower, 100000] (`what`: "cell", "node"); none after an error.
+std::optional<std::array<int, 3>> read_counts(const io::NodeReader& node, int lower, const std::string& what) {
+  const auto v = node.as_integers(3);
+  if (!v) return std::nullopt;
+  std::array<int, 3> counts{};
+  for (int d = 0; d < 3; ++d) {
+    const auto value = (*v)[static_cast<std::size_t>(d)];
+    if (value < lower || value > 100000) {
+      node.error(fmt::format("three {} counts between {} and 100000", what, lower));
+      return std::nullopt;
+    }
+    counts[static_cast<std::size_t>(d)] = static_cast<int>(value);
+  }
+  return counts;
+}
+
 efg::Region make_region(const io::Selection& s, const IndexList& nodes, const std::string& label) {
   efg::Region r;
   r.spec = s.spec;
@@ -63,18 +79,7 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
   io::NodeReader integration = section.child("integration");
   if (integration.defined() && integration.expect_map()) {
     io::NodeReader cells = integration.child("cells");
-    if (cells.defined()) {
-      if (auto v = cells.as_integers(3)) {
-        std::array<int, 3> counts{};
-        bool ok = true;
-        for (int d = 0; d < 3; ++d) {
-          if ((*v)[static_cast<std::size_t>(d)] < 1 || (*v)[static_cast<std::size_t>(d)] > 100000) ok = false;
-          counts[static_cast<std::size_t>(d)] = static_cast<int>((*v)[static_cast<std::size_t>(d)]);
-        }
-        if (ok) o.cells = counts;
-        else cells.error("three cell counts between 1 and 100000");
-      }
-    }
+    if (cells.defined()) o.cells = read_counts(cells, 1, "cell");
     io::NodeReader gauss = integration.child("gauss");
     if (gauss.defined()) {
       if (gauss.is_sequence()) {
@@ -101,16 +106,7 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
     io::NodeReader pressure_nodes = integration.child("pressure_nodes");
     if (pressure_nodes.defined()) {
       if (!o.projected_volumetric) pressure_nodes.error("no pressure_nodes unless volumetric: projected", "pressure_nodes with volumetric: " + volumetric);
-      else if (auto v = pressure_nodes.as_integers(3)) {
-        std::array<int, 3> counts{};
-        bool ok = true;
-        for (int d = 0; d < 3; ++d) {
-          if ((*v)[static_cast<std::size_t>(d)] < 2 || (*v)[static_cast<std::size_t>(d)] > 100000) ok = false;
-          counts[static_cast<std::size_t>(d)] = static_cast<int>((*v)[static_cast<std::size_t>(d)]);
-        }
-        if (ok) o.pressure_nodes = counts;
-        else pressure_nodes.error("three node counts between 2 and 100000");
-      }
+      else o.pressure_nodes = read_counts(pressure_nodes, 2, "node");
     }
     for (int d = 0; d < 3; ++d) o.volumetric_gauss[static_cast<std::size_t>(d)] = std::max(o.gauss[static_cast<std::size_t>(d)] - 1, 1);
     if (integration.has("volumetric_gauss")) {

@@ -2,6 +2,8 @@
 // Helpers for the EFG unit tests: small problems built directly as efg::EfgProblem.
 #include <string>
 
+#include <fmt/format.h>
+
 #include "efg/efg_analysis.hpp"
 #include "geometry/generators.hpp"
 #include "geometry/selection.hpp"
@@ -56,6 +58,31 @@ inline EfgProblem make_problem(const geometry::GeometrySpec& g, const std::array
   m.elastic = material::LinearElastic{E, nu};
   p.materials.push_back(m);
   p.options.mls.dimension = 3;
+  return p;
+}
+
+/// Quarter of the clamped square plate of ../shared/references R1a/R1b: [0, 10]^2 x [0, 1], faces
+/// x = 0 and y = 0 clamped, pressure 400 on the top face where x > patch and y > patch, with the
+/// symmetry planes x = 10 and y = 10 if `symmetry`. E = 1e4.
+inline EfgProblem clamped_plate_quarter(const std::array<int, 3>& nodes, Real nu, Real patch, bool symmetry) {
+  EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(10, 10, 1)), nodes, 1e4, nu);
+  EssentialCondition clamp;
+  clamp.region = where("x < 1e-9 or y < 1e-9", p.cloud);
+  clamp.constrained = {true, true, true};
+  p.constraints.push_back(clamp);
+  if (symmetry) {
+    for (int a = 0; a < 2; ++a) {
+      EssentialCondition plane;
+      plane.region = where(a == 0 ? "x > 10 - 1e-9" : "y > 10 - 1e-9", p.cloud);
+      plane.constrained = {a == 0, a == 1, false};
+      p.constraints.push_back(plane);
+    }
+  }
+  EfgLoad load;
+  load.kind = EfgLoad::Kind::pressure;
+  load.region = where(fmt::format("x > {0:.17g} and y > {0:.17g} and z > 1 - 1e-9", patch), p.cloud);
+  load.scalar = constant(400.0);
+  p.loads.push_back(load);
   return p;
 }
 

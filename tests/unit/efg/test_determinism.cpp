@@ -17,16 +17,7 @@ namespace {
 using namespace testing;
 
 EfgProblem plate() {
-  EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(10, 10, 1)), {9, 9, 3}, 1e4, 0.3);
-  EssentialCondition clamp;
-  clamp.region = where("x < 1e-9 or y < 1e-9", p.cloud);
-  clamp.constrained = {true, true, true};
-  p.constraints.push_back(clamp);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::pressure;
-  load.region = where("x > 9 and y > 9 and z > 1 - 1e-9", p.cloud);
-  load.scalar = constant(400.0);
-  p.loads.push_back(load);
+  EfgProblem p = clamped_plate_quarter({9, 9, 3}, 0.3, 9.0, false);
   EfgLoad weight;
   weight.kind = EfgLoad::Kind::body_force;
   weight.region.spec.kind = geometry::SelectionSpec::Kind::all;
