@@ -609,12 +609,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
   } else {
     u_ = solve::solve_general(K, f, solver_report_);
   }
-  timings_["factor_s"] = solver_report_.factor_seconds;
-  timings_["solve_s"] = solver_report_.solve_seconds;
-  timings_["solver_residual"] = solver_report_.residual;
-  timings_["solver_backward_error"] = solver_report_.backward_error;
-  timings_["solver_rcond"] = solver_report_.rcond;
-  timings_["solver_cholmod"] = solver_report_.method == "cholmod_supernodal_llt" ? 1.0 : 0.0;
+  record_solver_report();
   timings_["solve_total_s"] = seconds_since(start);
   progress(0.9, "solved (" + solver_report_.method + ")");
 
@@ -767,6 +762,15 @@ material::Voigt EfgAnalysis::stress_at(const Vec3& x) const {
   int m = material_at(x);
   if (m < 0) m = node_material_.empty() ? 0 : node_material_[static_cast<std::size_t>(nearest_node(x))];
   return stress_of(m, strain_at(x), x);
+}
+
+void EfgAnalysis::record_solver_report() {
+  timings_["factor_s"] = solver_report_.factor_seconds;
+  timings_["solve_s"] = solver_report_.solve_seconds;
+  timings_["solver_residual"] = solver_report_.residual;
+  timings_["solver_backward_error"] = solver_report_.backward_error;
+  timings_["solver_rcond"] = solver_report_.rcond;
+  timings_["solver_cholmod"] = solver_report_.method == "cholmod_supernodal_llt" ? 1.0 : 0.0;
 }
 
 material::Voigt EfgAnalysis::stress_of(int m, const material::Voigt& strain, const Vec3& x) const {

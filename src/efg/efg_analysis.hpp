@@ -88,6 +88,8 @@ class EfgAnalysis : public Analysis {
   void strong_form_reactions_and_energies();
   void postprocess();
   int material_at(const Vec3& x) const;
+  /// Copies the solver report (factor and solve times, residuals, rcond, method) into the timings.
+  void record_solver_report();
   /// Stress of material m from the strain at x (with the projected pressure when projected).
   material::Voigt stress_of(int m, const material::Voigt& strain, const Vec3& x) const;
   Index nearest_node(const Vec3& x) const;

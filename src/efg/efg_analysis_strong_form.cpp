@@ -220,12 +220,7 @@ void EfgAnalysis::solve_strong_form(OutputSink* sink) {
   timings_["dofs"] = static_cast<Real>(3 * n);
   timings_["equations"] = static_cast<Real>(equations);
   timings_["nonzeros"] = static_cast<Real>(solver_report_.nonzeros);
-  timings_["factor_s"] = solver_report_.factor_seconds;
-  timings_["solve_s"] = solver_report_.solve_seconds;
-  timings_["solver_residual"] = solver_report_.residual;
-  timings_["solver_backward_error"] = solver_report_.backward_error;
-  timings_["solver_rcond"] = solver_report_.rcond;
-  timings_["solver_cholmod"] = solver_report_.method == "cholmod_supernodal_llt" ? 1.0 : 0.0;
+  record_solver_report();
   timings_["solve_total_s"] = seconds_since(start);
   if (!u_.allFinite())
     throw AnalysisError(fmt::format("the {} solution contains non-finite values; use a larger support (kappa 2.5 to 3)",
