@@ -183,6 +183,11 @@ RunResult run_case(const RunOptions& options) {
                         model.cloud.size());
   results.log(header.str());
   results.log("resolved case:\n" + resolved_yaml(c) + "\n");
+  const std::vector<std::string> warnings = analysis->warnings();
+  for (const auto& w : warnings) {
+    results.log("WARNING: " + w);
+    if (!options.quiet) fmt::print(stderr, "lamina: warning: {}\n", w);
+  }
 
   ProgressLine progress(options.quiet);
   RunSink sink(*analysis, c, model, results, progress, result);
@@ -192,6 +197,7 @@ RunResult run_case(const RunOptions& options) {
   summary["method"] = c.method;
   summary["lamina_version"] = version;
   if (!c.units.empty()) summary["units"] = c.units;
+  if (!warnings.empty()) summary["warnings"] = warnings;
   const auto run_start = std::chrono::steady_clock::now();
   try {
     sink.start();

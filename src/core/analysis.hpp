@@ -55,6 +55,10 @@ class Analysis {
   virtual RunCounts counts() const = 0;
   /// Named timings (seconds) of the stages, e.g. {"setup_s", ...}; summary.json lists them.
   virtual std::map<std::string, Real> timings() const { return {}; }
+  /// Notes on settings that are valid but likely to mislead (e.g. a nearly incompressible material
+  /// without a locking remedy), one sentence each; known after construction. The application prints
+  /// them, writes them to log.txt and lists them in summary.json.
+  virtual std::vector<std::string> warnings() const { return {}; }
 };
 
 }  // namespace lamina

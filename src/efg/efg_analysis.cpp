@@ -764,6 +764,18 @@ material::Voigt EfgAnalysis::stress_at(const Vec3& x) const {
   return stress_of(m, strain_at(x), x);
 }
 
+std::vector<std::string> EfgAnalysis::warnings() const {
+  std::vector<std::string> out;
+  const auto& o = problem_.options;
+  if (o.formulation != Formulation::galerkin || o.projected_volumetric || o.reduced_volumetric) return out;
+  for (std::size_t i = 0; i < materials_.size(); ++i)
+    if (materials_[i].nu > 0.45)
+      out.push_back(fmt::format("materials.{} has nu = {:g} with efg.integration.volumetric: full; expect volumetric "
+                                "locking (a too stiff result); use efg.integration: {{volumetric: projected}}",
+                                i, materials_[i].nu));
+  return out;
+}
+
 void EfgAnalysis::record_solver_report() {
   timings_["factor_s"] = solver_report_.factor_seconds;
   timings_["solve_s"] = solver_report_.solve_seconds;

@@ -65,6 +65,7 @@ class EfgAnalysis : public Analysis {
   material::Voigt stress_at(const Vec3& x) const;
   const Eigen::VectorXd& nodal_parameters() const { return u_; }
   Real quadrature_volume() const;
+  std::vector<std::string> warnings() const override;
   Real internal_energy() const { return energy_internal_; }
   Real external_energy() const { return energy_external_; }
   /// Sum of the constraint (reaction) forces attributed to the given nodes (all if empty).

@@ -130,3 +130,21 @@ TEST(VolumetricProjection, NearlyIncompressiblePlateDoesNotLock) {
 
 }  // namespace
 }  // namespace lamina::efg
+
+namespace lamina::efg {
+namespace {
+
+using namespace testing;
+
+TEST(VolumetricProjection, NearlyIncompressibleWithoutRemedyIsWarnedAbout) {
+  EfgProblem p = clamped_plate_quarter({5, 5, 3}, 0.4999, 9.0, false);
+  EXPECT_EQ(EfgAnalysis(p, {}).warnings().size(), 1u);
+  p.options.projected_volumetric = true;
+  EXPECT_TRUE(EfgAnalysis(p, {}).warnings().empty());
+  p.options.projected_volumetric = false;
+  p.materials[0].elastic.nu = 0.3;
+  EXPECT_TRUE(EfgAnalysis(p, {}).warnings().empty());
+}
+
+}  // namespace
+}  // namespace lamina::efg
