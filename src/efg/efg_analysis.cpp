@@ -214,6 +214,8 @@ void EfgAnalysis::setup() {
     pressure.kappa = problem_.options.pressure_kappa;
     pressure.kappa_axes = Vec3::Zero();
     pressure.interface_enrichment = false;
+    // on curved bodies an axis-aligned box of 1.1 spacings can miss the diagonal neighbours: grow it there
+    pressure.singular_remedy = true;
     std::optional<std::array<int, 3>> pressure_counts = problem_.options.pressure_nodes;
     if (!pressure_counts && cloud.counts[0] > 1 && cloud.counts[1] > 1 && cloud.counts[2] > 1) {
       pressure_counts = std::array<int, 3>{};

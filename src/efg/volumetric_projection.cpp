@@ -69,7 +69,16 @@ ProjectedVolumetric project_volumetric(const mls::MlsShapeFunctions& shapes, con
                                        const VolumeQuadrature& volume, const Eigen::VectorXd& lambda_at_point) {
   const Index n = shapes.node_count(), pressure_nodes = pressure.node_count(), points = volume.size();
   const auto displacement_values = shapes.evaluate_all(volume.points, 1);
-  const auto pressure_values = pressure.evaluate_all(volume.points, 0);
+  std::vector<mls::ShapeFunctionValues> pressure_values;
+  try {
+    pressure_values = pressure.evaluate_all(volume.points, 0);
+  } catch (const mls::SingularMomentMatrix& e) {
+    throw InputError("efg.integration.pressure_kappa",
+                     "pressure functions defined at every quadrature point (a larger pressure_kappa or fewer pressure_nodes)",
+                     fmt::format("a singular linear MLS moment matrix of the pressure functions at ({:.6g}, {:.6g}, {:.6g}) "
+                                 "with {} pressure nodes in reach",
+                                 e.point()[0], e.point()[1], e.point()[2], e.neighbours()));
+  }
 
   // transpose of psi: for every pressure node the quadrature points in its support, with w_q psi_I(x_q)
   std::vector<Index> start(static_cast<std::size_t>(pressure_nodes + 1), 0);
