@@ -206,16 +206,15 @@ void EfgAnalysis::setup() {
   Eigen::Matrix3Xd spacing = cloud.spacing.cols() == n ? cloud.spacing : Eigen::Matrix3Xd();
   shapes_ = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, problem_.options.mls, spacing);
   if (problem_.options.projected_volumetric) {
-    // pressure functions: a linear MLS partition of unity with a small box support
+    // pressure nodes with small box supports: Shepard pressure functions (volumetric_projection.hpp)
     mls::MlsOptions pressure = problem_.options.mls;
-    pressure.basis = mls::Basis::linear;
+    pressure.basis = mls::Basis::linear;  // only the support search and radii are used (Shepard functions)
     pressure.shape = mls::SupportShape::box;
     pressure.mode = mls::SupportMode::kappa;
     pressure.kappa = problem_.options.pressure_kappa;
     pressure.kappa_axes = Vec3::Zero();
     pressure.interface_enrichment = false;
-    // on curved bodies an axis-aligned box of 1.1 spacings can miss the diagonal neighbours: grow it there
-    pressure.singular_remedy = true;
+    pressure.singular_remedy = false;
     std::optional<std::array<int, 3>> pressure_counts = problem_.options.pressure_nodes;
     if (!pressure_counts && cloud.counts[0] > 1 && cloud.counts[1] > 1 && cloud.counts[2] > 1) {
       pressure_counts = std::array<int, 3>{};
@@ -439,7 +438,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
     Eigen::VectorXd lambda(volume_.size());
     for (Index q = 0; q < volume_.size(); ++q)
       lambda[q] = materials_[static_cast<std::size_t>(material_of_point_[static_cast<std::size_t>(q)])].lambda();
-    projection_ = std::make_unique<ProjectedVolumetric>(project_volumetric(*shapes_, *pressure_shapes_, volume_, lambda));
+    projection_ = std::make_unique<ProjectedVolumetric>(project_volumetric(*shapes_, ShepardPressure(*pressure_shapes_), volume_, lambda));
     for (const auto& list : projection_->nodes) groups.push_back(list);
     timings_["projection_s"] = seconds_since(start);
   }
@@ -792,7 +791,7 @@ material::Voigt EfgAnalysis::stress_of(int m, const material::Voigt& strain, con
   // sigma = 2 mu eps + p I with the projected pressure p(x) = sum_I psi_I(x) lambda_I theta_I
   material::Voigt s = deviatoric_materials_[static_cast<std::size_t>(m)].stress(strain);
   mls::ShapeFunctionValues pv;
-  pressure_shapes_->evaluate(x, 0, pv);
+  if (!ShepardPressure(*pressure_shapes_).evaluate(x, pv)) return s;  // outside every pressure support
   Real p = 0.0;
   for (std::size_t k = 0; k < pv.neighbours.size(); ++k) p += pv.phi[static_cast<Index>(k)] * nodal_pressure_[pv.neighbours[k]];
   s.head<3>().array() += p;

@@ -74,7 +74,7 @@ struct EfgOptions {
   bool reduced_volumetric = false;              // selective reduced integration of the lambda term
   std::array<int, 3> volumetric_gauss{1, 1, 1}; // its Gauss order (default: gauss - 1, at least 1)
   bool projected_volumetric = false;            // lambda term with the divergence projected on nodal pressures
-  Real pressure_kappa = 1.1;                    // support of the linear-MLS pressure functions (box, x spacing)
+  Real pressure_kappa = 1.1;                    // box support of the Shepard pressure functions (x pressure node spacing)
   /// Pressure nodes per direction, generated on the same body (none: every other displacement node,
   /// n / 2 + 1 per direction, as the vertices of Taylor-Hood Q2/Q1 elements; the displacement nodes
   /// themselves if they are not a structured grid).

@@ -65,20 +65,48 @@ void ProjectedVolumetric::add_stiffness(const solve::BlockPattern& pattern, Real
   }
 }
 
-ProjectedVolumetric project_volumetric(const mls::MlsShapeFunctions& shapes, const mls::MlsShapeFunctions& pressure,
-                                       const VolumeQuadrature& volume, const Eigen::VectorXd& lambda_at_point) {
-  const Index n = shapes.node_count(), pressure_nodes = pressure.node_count(), points = volume.size();
-  const auto displacement_values = shapes.evaluate_all(volume.points, 1);
-  std::vector<mls::ShapeFunctionValues> pressure_values;
-  try {
-    pressure_values = pressure.evaluate_all(volume.points, 0);
-  } catch (const mls::SingularMomentMatrix& e) {
-    throw InputError("efg.integration.pressure_kappa",
-                     "pressure functions defined at every quadrature point (a larger pressure_kappa or fewer pressure_nodes)",
-                     fmt::format("a singular linear MLS moment matrix of the pressure functions at ({:.6g}, {:.6g}, {:.6g}) "
-                                 "with {} pressure nodes in reach",
-                                 e.point()[0], e.point()[1], e.point()[2], e.neighbours()));
+bool ShepardPressure::evaluate(const Vec3& x, mls::ShapeFunctionValues& out) const {
+  nodes_.neighbours(x, out.neighbours);
+  const auto count = static_cast<Index>(out.neighbours.size());
+  out.phi.resize(count);
+  const auto& radii = nodes_.support_radii();
+  const bool box = nodes_.options().shape == mls::SupportShape::box;
+  const int dimension = nodes_.options().dimension;
+  Real sum = 0.0;
+  for (Index k = 0; k < count; ++k) {
+    const Index i = out.neighbours[static_cast<std::size_t>(k)];
+    const Vec3 d = x - nodes_.nodes().col(i);
+    Real w = 1.0;
+    if (box) {
+      for (int a = 0; a < dimension; ++a) w *= weight_.evaluate(std::abs(d[a]) / radii(a, i)).value;
+    } else {
+      w = weight_.evaluate(d.head(dimension).norm() / radii(0, i)).value;
+    }
+    out.phi[k] = w;
+    sum += w;
   }
+  if (!(sum > 0.0)) return false;
+  out.phi /= sum;
+  return true;
+}
+
+ProjectedVolumetric project_volumetric(const mls::MlsShapeFunctions& shapes, const ShepardPressure& pressure,
+                                       const VolumeQuadrature& volume, const Eigen::VectorXd& lambda_at_point) {
+  const Index n = shapes.node_count(), pressure_nodes = pressure.nodes().node_count(), points = volume.size();
+  const auto displacement_values = shapes.evaluate_all(volume.points, 1);
+  std::vector<mls::ShapeFunctionValues> pressure_values(static_cast<std::size_t>(points));
+  Index uncovered = -1;
+#pragma omp parallel for schedule(static)
+  for (Index q = 0; q < points; ++q)
+    if (!pressure.evaluate(volume.points.col(q), pressure_values[static_cast<std::size_t>(q)])) {
+#pragma omp critical(lamina_pressure_uncovered)
+      if (uncovered < 0 || q < uncovered) uncovered = q;
+    }
+  if (uncovered >= 0)
+    throw InputError("efg.integration.pressure_kappa",
+                     "pressure node supports that cover every quadrature point (a larger pressure_kappa or more pressure_nodes)",
+                     fmt::format("no pressure node in reach of the quadrature point ({:.6g}, {:.6g}, {:.6g})",
+                                 volume.points(0, uncovered), volume.points(1, uncovered), volume.points(2, uncovered)));
 
   // transpose of psi: for every pressure node the quadrature points in its support, with w_q psi_I(x_q)
   std::vector<Index> start(static_cast<std::size_t>(pressure_nodes + 1), 0);
@@ -141,7 +169,8 @@ ProjectedVolumetric project_volumetric(const mls::MlsShapeFunctions& shapes, con
                        "pressure functions that each have a positive integral over the body (a larger pressure_kappa, "
                        "fewer pressure_nodes or more Gauss points)",
                        fmt::format("pressure node {} at ({:.6g}, {:.6g}, {:.6g}) with integral {:.3g}", i,
-                                   pressure.nodes()(0, i), pressure.nodes()(1, i), pressure.nodes()(2, i), out.lumped[i]));
+                                   pressure.nodes().nodes()(0, i), pressure.nodes().nodes()(1, i), pressure.nodes().nodes()(2, i),
+                                   out.lumped[i]));
   return out;
 }
 
