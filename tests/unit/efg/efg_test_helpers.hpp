@@ -48,6 +48,17 @@ inline geometry::ScalarField constant(Real value) {
   return f;
 }
 
+/// The thick curved beam of reference R2: quarter ring r = 3..5, z in [-1, 1].
+inline geometry::GeometrySpec curved_beam_spec() {
+  geometry::GeometrySpec g;
+  g.type = geometry::GeometryType::curved_beam;
+  g.inner_radius = 3;
+  g.outer_radius = 5;
+  g.angle_deg = 90;
+  g.z_range = {-1, 1};
+  return g;
+}
+
 /// A body with nodes and one material, no conditions yet.
 inline EfgProblem make_problem(const geometry::GeometrySpec& g, const std::array<int, 3>& nodes, Real E, Real nu) {
   EfgProblem p;

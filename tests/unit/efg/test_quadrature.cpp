@@ -6,11 +6,14 @@
 #include <numbers>
 
 #include "efg/background_quadrature.hpp"
+#include "efg_test_helpers.hpp"
 #include "geometry/body_maps.hpp"
 #include "geometry/generators.hpp"
 
 namespace lamina::efg {
 namespace {
+
+using testing::curved_beam_spec;
 
 TEST(GaussLegendre, IntegratesPolynomialsOfDegree2nMinus1Exactly) {
   for (int n = 1; n <= 12; ++n) {
@@ -41,16 +44,6 @@ geometry::GeometrySpec box_spec() {
   g.type = geometry::GeometryType::box;
   g.min = Vec3(0, -1, 2);
   g.max = Vec3(4, 1, 2.5);
-  return g;
-}
-
-geometry::GeometrySpec curved_beam_spec() {
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::curved_beam;
-  g.inner_radius = 3;
-  g.outer_radius = 5;
-  g.angle_deg = 90;
-  g.z_range = {-1, 1};
   return g;
 }
 

@@ -159,13 +159,7 @@ using namespace testing;
 /// (5 x 21 x 3: -0.36588) over -0.37027 (9 x 41 x 5) to -0.37092 at 13 x 61 x 7 (lamina, projected;
 /// the reduced rule gives -0.36929 there, the full lambda term -0.36590).
 TEST(VolumetricProjection, CurvedBodyIsCoveredByThePressureFunctions) {
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::curved_beam;
-  g.inner_radius = 3;
-  g.outer_radius = 5;
-  g.angle_deg = 90;
-  g.z_range = {-1, 1};
-  EfgProblem p = make_problem(g, {5, 21, 3}, 1e4, 0.4999);
+  EfgProblem p = make_problem(curved_beam_spec(), {5, 21, 3}, 1e4, 0.4999);
   p.options.mls.kappa = 3.0;
   p.options.gauss = {3, 3, 3};
   p.options.projected_volumetric = true;
