@@ -229,6 +229,7 @@ void EfgAnalysis::setup() {
     } else {
       pressure_shapes_ = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, pressure, spacing);
     }
+    pressure_ = std::make_unique<ShepardPressure>(*pressure_shapes_);
   }
 
   for (const auto& m : problem_.materials)
@@ -438,7 +439,7 @@ void EfgAnalysis::assemble_and_solve(OutputSink* sink) {
     Eigen::VectorXd lambda(volume_.size());
     for (Index q = 0; q < volume_.size(); ++q)
       lambda[q] = materials_[static_cast<std::size_t>(material_of_point_[static_cast<std::size_t>(q)])].lambda();
-    projection_ = std::make_unique<ProjectedVolumetric>(project_volumetric(*shapes_, ShepardPressure(*pressure_shapes_), volume_, lambda));
+    projection_ = std::make_unique<ProjectedVolumetric>(project_volumetric(*shapes_, *pressure_, volume_, lambda));
     for (const auto& list : projection_->nodes) groups.push_back(list);
     timings_["projection_s"] = seconds_since(start);
   }
@@ -791,7 +792,7 @@ material::Voigt EfgAnalysis::stress_of(int m, const material::Voigt& strain, con
   // sigma = 2 mu eps + p I with the projected pressure p(x) = sum_I psi_I(x) lambda_I theta_I
   material::Voigt s = deviatoric_materials_[static_cast<std::size_t>(m)].stress(strain);
   mls::ShapeFunctionValues pv;
-  if (!ShepardPressure(*pressure_shapes_).evaluate(x, pv)) return s;  // outside every pressure support
+  if (!pressure_->evaluate(x, pv)) return s;  // outside every pressure support
   Real p = 0.0;
   for (std::size_t k = 0; k < pv.neighbours.size(); ++k) p += pv.phi[static_cast<Index>(k)] * nodal_pressure_[pv.neighbours[k]];
   s.head<3>().array() += p;

@@ -107,7 +107,8 @@ class EfgAnalysis : public Analysis {
   std::vector<int> material_of_reduced_point_;
   std::unique_ptr<mls::MlsShapeFunctions> shapes_;
   // projected volumetric term (efg.integration.volumetric: projected)
-  std::unique_ptr<mls::MlsShapeFunctions> pressure_shapes_;
+  std::unique_ptr<mls::MlsShapeFunctions> pressure_shapes_;  // pressure nodes: support search and radii
+  std::unique_ptr<ShepardPressure> pressure_;                  // the pressure functions over them
   std::unique_ptr<ProjectedVolumetric> projection_;
   std::vector<material::LinearElastic> deviatoric_materials_;  // lambda = 0, same mu
   Eigen::VectorXd nodal_pressure_;           // lambda_I theta_I per node (projected only)

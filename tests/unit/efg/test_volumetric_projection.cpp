@@ -94,12 +94,11 @@ TEST(VolumetricProjection, StiffnessIsTheProjectedQuadraticForm) {
 }
 
 TEST(VolumetricProjection, AssemblyIsIndependentOfTheThreadCount) {
-  ProjectionSetup s(1.0);
-  const Eigen::VectorXd u = Eigen::VectorXd::Random(3 * s.cloud.size());
   std::vector<Real> one, two;
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
   ProjectionSetup s1(1.0);
+  const Eigen::VectorXd u = Eigen::VectorXd::Random(3 * s1.cloud.size());
   assembled_product(s1, u, &one);
   omp_set_num_threads(2);
   ProjectionSetup s2(1.0);
