@@ -232,12 +232,14 @@ int check_case(const std::string& path, const std::vector<std::string>& override
   PreparedCase prepared = prepare_case(path, overrides);
   const io::Case& c = prepared.case_data;
   Model model = build_point_model(c);  // resolves every selection: empty ones are errors
+  std::vector<std::string> warnings;
   try {
     // the method's set-up checks too (e.g. a traction selection without an edge), as `run` would do them
-    prepared.method->create(c, model, *prepared.options);
+    warnings = prepared.method->create(c, model, *prepared.options)->warnings();
   } catch (const InputError& e) {
     throw locate(e, c);
   }
+  for (const auto& w : warnings) fmt::print(stderr, "lamina: warning: {}\n", w);
   std::cout << "# lamina check: " << c.file << " is valid\n";
   std::cout << fmt::format("# method {}, {} nodes, {} boundary conditions, {} loads, {} probes\n", c.method,
                            model.cloud.size(), c.boundary.size(), c.loads.size(), c.probes.size());

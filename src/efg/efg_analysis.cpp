@@ -767,7 +767,7 @@ material::Voigt EfgAnalysis::stress_at(const Vec3& x) const {
 }
 
 std::vector<std::string> EfgAnalysis::warnings() const {
-  std::vector<std::string> out;
+  std::vector<std::string> out = support_warnings();
   const auto& o = problem_.options;
   if (o.formulation != Formulation::galerkin || o.projected_volumetric || o.reduced_volumetric) return out;
   for (std::size_t i = 0; i < materials_.size(); ++i)
@@ -775,6 +775,60 @@ std::vector<std::string> EfgAnalysis::warnings() const {
       out.push_back(fmt::format("materials.{} has nu = {:g} with efg.integration.volumetric: full; expect volumetric "
                                 "locking (a too stiff result); use efg.integration: {{volumetric: projected}}",
                                 i, materials_[i].nu));
+  return out;
+}
+
+std::vector<std::string> EfgAnalysis::support_warnings() const {
+  // Supports that gather far more nodes than the basis needs make the run slow and the stiffness
+  // nearly rank-deficient (every shape function spans the whole body). The usual cause is a sphere
+  // support (radius from the largest of a node's spacings) on strongly anisotropic spacing, e.g. node
+  // counts given in the wrong order for a thin wall.
+  std::vector<std::string> out;
+  const mls::MlsOptions& mls = problem_.options.mls;
+  const PointCloud& cloud = problem_.cloud;
+  const Index n = cloud.size();
+  if (mls.mode != mls::SupportMode::kappa || n == 0) return out;
+  // warnings() runs before setup(): build the supports here (radii and a cell list, no shape functions)
+  Real worst_ratio = 1.0;
+  double mean = 0.0;
+  try {
+    std::unique_ptr<mls::MlsShapeFunctions> built;
+    if (!shapes_)
+      built = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, mls,
+                                                       cloud.spacing.cols() == n ? cloud.spacing : Eigen::Matrix3Xd());
+    const mls::MlsShapeFunctions& supports = shapes_ ? *shapes_ : *built;
+    const Eigen::Matrix3Xd& spacing = supports.nodal_spacing();
+    for (Index i = 0; i < spacing.cols(); ++i) {
+      const auto h = spacing.col(i);
+      if (h.minCoeff() > 0.0) worst_ratio = std::max(worst_ratio, h.maxCoeff() / h.minCoeff());
+    }
+    const Index stride = std::max<Index>(1, n / 2000);  // sample at most ~2000 nodes
+    IndexList neighbours;
+    double total = 0.0;
+    Index samples = 0;
+    for (Index i = 0; i < n; i += stride, ++samples) {
+      supports.neighbours(supports.nodes().col(i), neighbours);
+      total += static_cast<double>(neighbours.size());
+    }
+    mean = total / static_cast<double>(samples);
+  } catch (const std::exception&) {
+    return out;  // setup() reports the problem as an input error
+  }
+  const bool sphere = mls.shape == mls::SupportShape::sphere;
+  const std::string order_hint =
+      "check the order of discretization.nodes (a cylinder wall takes [thickness, circumferential, axial])";
+  if (mean > kCrowdedSupport && mean > 0.25 * static_cast<double>(n))
+    out.push_back(fmt::format("efg.support: each node's support holds {:.0f} of the {} nodes on average, so the run will be "
+                              "slow and the shape functions nearly global; the nodal spacings differ up to {:.3g} times "
+                              "between directions{}; {}",
+                              mean, n, worst_ratio,
+                              sphere ? " and a sphere's radius follows the largest, so use efg.support.shape: box" : "",
+                              order_hint));
+  else if (sphere && worst_ratio > kSphereAnisotropy)
+    out.push_back(fmt::format("efg.support: the nodal spacings differ up to {:.3g} times between directions and a sphere "
+                              "support's radius follows the largest (supports hold {:.0f} nodes on average); "
+                              "efg.support.shape: box scales each direction by its own spacing",
+                              worst_ratio, mean));
   return out;
 }
 

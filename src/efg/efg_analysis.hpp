@@ -65,7 +65,12 @@ class EfgAnalysis : public Analysis {
   material::Voigt stress_at(const Vec3& x) const;
   const Eigen::VectorXd& nodal_parameters() const { return u_; }
   Real quadrature_volume() const;
+  /// Likely set-up mistakes that still run: nu > 0.45 without a volumetric remedy; supports holding a
+  /// large share of the body (slow, nearly global shape functions); sphere supports on spacings that
+  /// differ more than kSphereAnisotropy times between directions.
   std::vector<std::string> warnings() const override;
+  static constexpr double kCrowdedSupport = 400.0;   // mean support population that counts as crowded
+  static constexpr double kSphereAnisotropy = 4.0;   // spacing ratio beyond which a sphere is a poor fit
   Real internal_energy() const { return energy_internal_; }
   Real external_energy() const { return energy_external_; }
   /// Sum of the constraint (reaction) forces attributed to the given nodes (all if empty).
@@ -77,6 +82,7 @@ class EfgAnalysis : public Analysis {
   const EfgProblem& problem() const { return problem_; }
 
  private:
+  std::vector<std::string> support_warnings() const;
   void setup();
   void assign_materials();
   void build_constraints();

@@ -124,5 +124,48 @@ TEST(EfgErrors, NearlyIncompressibleMaterialRunsWithoutNaN) {
   EXPECT_TRUE(a.nodal_parameters().allFinite());
 }
 
+/// A tube wall (radius 1, thickness 0.1, length 10 along x) with node counts in the given order.
+EfgProblem tube(const std::array<int, 3>& nodes, mls::SupportShape shape) {
+  geometry::GeometrySpec g;
+  g.type = geometry::GeometryType::cylinder;
+  g.radius = 1.0;
+  g.length = 10.0;
+  g.axis = 0;
+  g.thickness = 0.1;
+  g.angle_deg = 360.0;
+  EfgProblem p = make_problem(g, nodes, 1e4, 0.3);
+  p.options.mls.basis = mls::Basis::quadratic;
+  p.options.mls.shape = shape;
+  p.options.mls.kappa = shape == mls::SupportShape::sphere ? 2.5 : 2.0;
+  return p;
+}
+
+bool mentions(const std::vector<std::string>& warnings, const std::string& text) {
+  for (const auto& w : warnings)
+    if (w.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// Node counts in the wrong order ([axial, circumferential, thickness] instead of [thickness,
+// circumferential, axial]) give spacings 78 times apart: a sphere support then holds every node,
+// the run takes minutes and ends singular. It is named up front.
+TEST(EfgErrors, CrowdedSupportsAreWarnedAboutBeforeTheRun) {
+  const auto wrong = EfgAnalysis(tube({33, 17, 3}, mls::SupportShape::sphere), {}).warnings();
+  ASSERT_EQ(wrong.size(), 1u);
+  EXPECT_TRUE(mentions(wrong, "discretization.nodes"));
+  EXPECT_TRUE(mentions(wrong, "shape: box"));
+  // the intended order: box supports are quiet; a sphere is told about the 12.6 x spacing ratio
+  EXPECT_TRUE(EfgAnalysis(tube({3, 33, 17}, mls::SupportShape::box), {}).warnings().empty());
+  const auto sphere = EfgAnalysis(tube({3, 33, 17}, mls::SupportShape::sphere), {}).warnings();
+  ASSERT_EQ(sphere.size(), 1u);
+  EXPECT_FALSE(mentions(sphere, "discretization.nodes")) << sphere[0];
+  EXPECT_TRUE(mentions(sphere, "shape: box"));
+  // a uniform cloud with a sphere support: no warning
+  EfgProblem cube = make_problem(box(Vec3::Zero(), Vec3::Ones()), {5, 5, 5}, 1e4, 0.3);
+  cube.options.mls.shape = mls::SupportShape::sphere;
+  cube.options.mls.kappa = 2.5;
+  EXPECT_TRUE(EfgAnalysis(cube, {}).warnings().empty());
+}
+
 }  // namespace
 }  // namespace lamina::efg
