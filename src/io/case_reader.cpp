@@ -427,7 +427,7 @@ Case CaseReader::read() {
         std::filesystem::path p(file);
         if (p.is_relative()) p = std::filesystem::path(path_).parent_path() / p;
         disc.nodes_file = p.string();
-        if (!file.empty() && !std::filesystem::exists(p)) n.child("file").error("an existing CSV file of x,y,z", "'" + p.string() + "'");
+        if (!file.empty() && !std::filesystem::exists(p)) n.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", p.string()));
         n.reject_unknown_keys();
       } else if (auto counts = n.as_integers(3)) {
         std::array<int, 3> v{};
