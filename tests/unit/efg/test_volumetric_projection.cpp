@@ -179,3 +179,50 @@ TEST(VolumetricProjection, CurvedBodyIsCoveredByThePressureFunctions) {
 
 }  // namespace
 }  // namespace lamina::efg
+
+namespace lamina::efg {
+namespace {
+
+using namespace testing;
+
+// The Shepard pressure functions on box and on sphere supports: non-negative, a partition of unity,
+// and zero for pressure nodes out of reach (neighbours only within each node's support radius).
+TEST(VolumetricProjection, ShepardFunctionsArePositivePartitionsOfUnityForBothShapes) {
+  const geometry::GeometrySpec g = box(Vec3::Zero(), Vec3(2, 1, 1));
+  const PointCloud coarse = geometry::generate_volume_nodes(g, {5, 3, 3});
+  for (const auto shape : {mls::SupportShape::box, mls::SupportShape::sphere}) {
+    mls::MlsOptions o;
+    o.dimension = 3;
+    o.basis = mls::Basis::linear;
+    o.weight = mls::Weight::quartic_spline;
+    o.shape = shape;
+    o.kappa = shape == mls::SupportShape::box ? 1.1 : 1.6;
+    const mls::MlsShapeFunctions nodes(coarse.positions, o, coarse.spacing);
+    const ShepardPressure pressure(nodes);
+    mls::ShapeFunctionValues v;
+    for (int k = 0; k < 60; ++k) {
+      const Vec3 x(1.0 + 0.999 * std::sin(1.7 * k), 0.5 + 0.499 * std::sin(2.3 * k + 1), 0.5 + 0.499 * std::sin(3.1 * k + 2));
+      ASSERT_TRUE(pressure.evaluate(x, v)) << "shape " << mls::to_string(shape) << " at " << x.transpose();
+      EXPECT_NEAR(v.phi.sum(), 1.0, 1e-14);
+      EXPECT_GE(v.phi.minCoeff(), 0.0);
+      // the values are the normalised quartic-spline weights of the support's own distance measure
+      const auto quartic = [](Real q) { return q < 1.0 ? 1 - 6 * q * q + 8 * q * q * q - 3 * q * q * q * q : 0.0; };
+      Eigen::VectorXd w(static_cast<Index>(v.neighbours.size()));
+      for (std::size_t j = 0; j < v.neighbours.size(); ++j) {
+        const Vec3 d = x - coarse.positions.col(v.neighbours[j]);
+        const Vec3 r = nodes.support_radii().col(v.neighbours[j]);
+        if (shape == mls::SupportShape::box) {
+          EXPECT_TRUE((d.cwiseAbs().array() <= r.array()).all());
+          w[static_cast<Index>(j)] = quartic(std::abs(d[0]) / r[0]) * quartic(std::abs(d[1]) / r[1]) * quartic(std::abs(d[2]) / r[2]);
+        } else {
+          EXPECT_LE(d.norm(), r[0]);
+          w[static_cast<Index>(j)] = quartic(d.norm() / r[0]);
+        }
+      }
+      EXPECT_LT((v.phi - w / w.sum()).cwiseAbs().maxCoeff(), 1e-14);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lamina::efg
