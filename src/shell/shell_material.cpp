@@ -1,5 +1,6 @@
 #include "shell/shell_material.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace lamina::shell {
@@ -68,6 +69,64 @@ Real NeoHookeanShellMaterial::update(Real* sigma, const Real* rate, Real dt) con
   sigma[3] += dt * mu_ * rate[3];
   sigma[4] += dt * mu_ * rate[4];
   return dt > 0.0 ? (e3 - e3_old) / dt : 0.0;
+}
+
+J2PlasticShellMaterial::J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening)
+    : young_(young), poisson_(poisson), density_(density), yield_(yield), hardening_(hardening) {}
+
+Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
+  const Real E = young_, nu = poisson_, c = E / (1.0 - nu * nu), g = E / (2.0 * (1.0 + nu));
+  Real& eps_p = sigma[kStressComponents];
+  const Real old_sum = sigma[0] + sigma[1];
+  // elastic trial
+  Real sxx = sigma[0] + dt * c * (rate[0] + nu * rate[1]);
+  Real syy = sigma[1] + dt * c * (rate[1] + nu * rate[0]);
+  Real sxy = sigma[2] + dt * g * rate[2];
+  sigma[3] += dt * g * rate[3];
+  sigma[4] += dt * g * rate[4];
+  const auto von_mises = [](Real a, Real b, Real s) { return std::sqrt(std::max(0.0, a * a - a * b + b * b + 3.0 * s * s)); };
+  Real plastic_zz = 0.0;
+  if (von_mises(sxx, syy, sxy) > yield_ + hardening_ * eps_p) {
+    // return in the eigenbasis of C and P (seed-independent; Simo & Hughes 3.4)
+    const Real xi1 = (sxx + syy) / std::sqrt(2.0), xi2 = (syy - sxx) / std::sqrt(2.0), xi3 = sxy;
+    const Real k1 = E / (3.0 * (1.0 - nu)), k2 = 2.0 * g;
+    const Real a = xi1 * xi1 / 6.0, b = 0.5 * xi2 * xi2 + xi3 * xi3;  // (1/3) sigma_vm^2 = a / d1^2 + b / d2^2
+    const auto residual = [&](Real dg, Real& slope) {
+      const Real d1 = 1.0 + k1 * dg, d2 = 1.0 + k2 * dg;
+      const Real f2 = a / (d1 * d1) + b / (d2 * d2);
+      const Real vm = std::sqrt(3.0 * f2);
+      const Real df2 = -2.0 * a * k1 / (d1 * d1 * d1) - 2.0 * b * k2 / (d2 * d2 * d2);
+      const Real dvm = vm > 0.0 ? 1.5 * df2 / vm : 0.0;
+      slope = dvm - hardening_ * (2.0 / 3.0) * (vm + dg * dvm);
+      return vm - (yield_ + hardening_ * (eps_p + 2.0 / 3.0 * dg * vm));
+    };
+    // bracket: residual(0) > 0 and residual decreases; grow hi until the sign changes
+    Real lo = 0.0, hi = 1.0 / k2, slope = 0.0;
+    while (residual(hi, slope) > 0.0) hi *= 2.0;
+    Real dg = 0.0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      const Real r = residual(dg, slope);
+      if (std::abs(r) <= 1e-13 * yield_) break;
+      if (r > 0.0) lo = dg;
+      else hi = dg;
+      Real next = slope < 0.0 ? dg - r / slope : 0.5 * (lo + hi);
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // keep Newton inside the bracket
+      dg = next;
+    }
+    const Real d1 = 1.0 + k1 * dg, d2 = 1.0 + k2 * dg;
+    const Real r1 = xi1 / d1, r2 = xi2 / d2;
+    sxx = (r1 - r2) / std::sqrt(2.0);
+    syy = (r1 + r2) / std::sqrt(2.0);
+    sxy = xi3 / d2;
+    const Real vm = von_mises(sxx, syy, sxy);
+    eps_p += 2.0 / 3.0 * dg * vm;
+    plastic_zz = -dg * (sxx + syy) / 3.0;
+  }
+  sigma[0] = sxx;
+  sigma[1] = syy;
+  sigma[2] = sxy;
+  if (!(dt > 0.0)) return 0.0;
+  return (-nu / E * (sxx + syy - old_sum) + plastic_zz) / dt;
 }
 
 }  // namespace lamina::shell

@@ -21,6 +21,9 @@ class ShellMaterial {
   virtual Real update(Real* sigma, const Real* rate, Real dt) const = 0;
   /// History values stored after the 5 stresses at each through-thickness point (all zero initially).
   virtual int state_size() const { return 0; }
+  /// Equivalent plastic strain stored in one point's values (sigma + history); 0 for elastic models.
+  virtual Real plastic_strain(const Real* /*point*/) const { return 0.0; }
+  virtual bool is_plastic() const { return false; }
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
   virtual Real density() const = 0;
@@ -61,6 +64,32 @@ class NeoHookeanShellMaterial final : public ShellMaterial {
 
  private:
   Real young_, poisson_, density_, mu_, lambda_;
+};
+
+/// J2 (von Mises) plasticity in plane stress with linear isotropic hardening, hypoelastic in the
+/// corotational frame: sigma_y = yield + hardening * eps_p (eps_p the equivalent plastic strain, the one
+/// history value). Elastic trial C : d dt, then the closest-point return of Simo & Hughes (Computational
+/// Inelasticity, section 3.4, plane stress): with the trial stress in the common eigenbasis of C and P,
+/// xi_1 = (s_xx + s_yy)/sqrt2, xi_2 = (s_yy - s_xx)/sqrt2, xi_3 = s_xy, the returned stress is
+/// xi_1 / (1 + E dg / (3 (1 - nu))), xi_2,3 / (1 + 2 G dg), and dg solves sigma_vm(dg) = sigma_y(eps_p
+/// + 2/3 dg sigma_vm(dg)) (safeguarded Newton). Transverse shear stays elastic (G). The thickness rate
+/// is the elastic -nu/E (sigma_xx + sigma_yy)' plus the plastic -dg (sigma_xx + sigma_yy) / 3 (plastic
+/// incompressibility).
+class J2PlasticShellMaterial final : public ShellMaterial {
+ public:
+  J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening);
+  Real update(Real* sigma, const Real* rate, Real dt) const override;
+  int state_size() const override { return 1; }
+  Real plastic_strain(const Real* point) const override { return point[kStressComponents]; }
+  bool is_plastic() const override { return true; }
+  Real young_modulus() const override { return young_; }
+  Real poisson_ratio() const override { return poisson_; }
+  Real density() const override { return density_; }
+  Real yield_stress() const { return yield_; }
+  Real hardening() const { return hardening_; }
+
+ private:
+  Real young_, poisson_, density_, yield_, hardening_;
 };
 
 }  // namespace lamina::shell

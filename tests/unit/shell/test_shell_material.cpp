@@ -1,5 +1,6 @@
 // Shell materials at one through-thickness point: the neo-Hookean plane-stress model against its closed
-// form (principal stretches, lambda_3 from sigma_zz = 0) and against linear elasticity at small strain.
+// form (principal stretches, lambda_3 from sigma_zz = 0) and against linear elasticity at small strain;
+// J2 plane-stress plasticity against equibiaxial and pure-shear closed forms, consistency and unloading.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -91,6 +92,87 @@ TEST(shell_NeoHookean, UnloadingReturnsToZeroStress) {
   for (int k = 0; k < 50; ++k) m.update(point.data(), back, 0.02);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(point[c], 0.0, 1e-6) << c;
   EXPECT_NEAR(point[kStressComponents + 3], 0.0, 1e-12);  // ln lambda_3 back to zero
+}
+
+// J2 plane-stress plasticity (Simo-Hughes return). Proportional paths with linear hardening are
+// integrated exactly by the backward-Euler return, so they are compared with closed forms tightly.
+constexpr Real kYield = 250.0, kHardening = 2.0e3;
+
+Real von_mises(const std::vector<Real>& s) { return std::sqrt(s[0] * s[0] - s[0] * s[1] + s[1] * s[1] + 3 * s[2] * s[2]); }
+
+TEST(shell_J2Plasticity, EquibiaxialStretchMatchesClosedForm) {
+  // sigma_xx = sigma_yy = sigma: eps = sigma (1 - nu) / E + eps_p / 2, sigma = yield + H eps_p,
+  // thickness strain -2 nu sigma / E - eps_p (plastic incompressibility)
+  const J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
+  const Real rate[5] = {1, 1, 0, 0, 0};
+  for (const Real eps : {0.5e-3, 5e-3, 2e-2}) {
+    for (const int steps : {1, 7, 100}) {
+      Real thickness = 0.0;
+      const auto p = drive(m, rate, eps, steps, thickness);
+      const Real elastic = kE / (1 - kNu) * eps;
+      const Real sigma = elastic <= kYield ? elastic : (kYield + 2 * kHardening * eps) / (1 + 2 * kHardening * (1 - kNu) / kE);
+      const Real eps_p = elastic <= kYield ? 0.0 : (sigma - kYield) / kHardening;
+      EXPECT_NEAR(p[0], sigma, 1e-10 * sigma) << eps << " " << steps;
+      EXPECT_NEAR(p[1], sigma, 1e-10 * sigma);
+      EXPECT_NEAR(p[kStressComponents], eps_p, 1e-12 + 1e-10 * eps_p);
+      EXPECT_NEAR(thickness, -2 * kNu * sigma / kE - eps_p, 1e-12 + 1e-10 * eps);
+    }
+  }
+}
+
+TEST(shell_J2Plasticity, PureShearMatchesClosedForm) {
+  // tau = (yield + H eps_p) / sqrt3, gamma = tau / G + sqrt3 eps_p; no thickness change
+  const J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
+  const Real g = kE / (2 * (1 + kNu)), rate[5] = {0, 0, 1, 0, 0};
+  for (const Real gamma : {1e-3, 1e-2, 5e-2}) {
+    Real thickness = 0.0;
+    const auto p = drive(m, rate, gamma, 13, thickness);
+    const Real tau = g * gamma <= kYield / std::sqrt(3.0) ? g * gamma
+                                                           : (gamma + std::sqrt(3.0) * kYield / kHardening) / (1 / g + 3 / kHardening);
+    EXPECT_NEAR(p[2], tau, 1e-10 * tau) << gamma;
+    EXPECT_NEAR(p[0], 0.0, 1e-9);
+    EXPECT_NEAR(p[1], 0.0, 1e-9);
+    EXPECT_NEAR(thickness, 0.0, 1e-12);
+  }
+}
+
+TEST(shell_J2Plasticity, StressStaysOnTheYieldSurfaceAndUnloadsElastically) {
+  for (const Real hardening : {0.0, kHardening}) {
+    const J2PlasticShellMaterial m(kE, kNu, kRho, kYield, hardening);
+    std::vector<Real> p(static_cast<std::size_t>(kStressComponents + m.state_size()), 0.0);
+    Real previous_eps_p = 0.0;
+    for (int k = 0; k < 400; ++k) {  // a non-proportional path: rotating in-plane strain rate
+      const Real angle = 0.05 * k;
+      const Real rate[5] = {std::cos(angle), 0.5 * std::sin(1.3 * angle), 0.8 * std::sin(angle), 0.1, -0.1};
+      m.update(p.data(), rate, 2e-4);
+      const Real eps_p = p[kStressComponents], limit = kYield + hardening * eps_p;
+      EXPECT_LE(von_mises(p), limit * (1 + 1e-12)) << k;
+      if (eps_p > previous_eps_p) EXPECT_NEAR(von_mises(p), limit, 1e-10 * limit) << k;
+      EXPECT_GE(eps_p, previous_eps_p);
+      previous_eps_p = eps_p;
+    }
+    EXPECT_GT(previous_eps_p, 1e-3);  // the path went well into the plastic range
+    // unloading: the strain increment -0.01 C^-1 sigma scales the in-plane stress by 0.99 (elastic)
+    const std::vector<Real> before = p;
+    const Real g = kE / (2 * (1 + kNu));
+    const Real back[5] = {-0.01 * (before[0] - kNu * before[1]) / kE, -0.01 * (before[1] - kNu * before[0]) / kE,
+                          -0.01 * before[2] / g, 0, 0};
+    m.update(p.data(), back, 1.0);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(p[c], 0.99 * before[c], 1e-12 * kYield) << c;
+    EXPECT_EQ(p[kStressComponents], before[kStressComponents]);
+  }
+}
+
+TEST(shell_J2Plasticity, BelowYieldEqualsLinearElastic) {
+  const J2PlasticShellMaterial plastic(kE, kNu, kRho, kYield, kHardening);
+  const LinearElasticShellMaterial linear(kE, kNu, kRho);
+  const Real rate[5] = {3e-4, -1e-4, 2e-4, 1e-4, -2e-4};
+  Real t_plastic = 0.0, t_linear = 0.0;
+  const auto a = drive(plastic, rate, 1.0, 10, t_plastic);
+  const auto b = drive(linear, rate, 1.0, 10, t_linear);
+  for (int c = 0; c < kStressComponents; ++c) EXPECT_NEAR(a[c], b[c], 1e-12 * kE) << c;
+  EXPECT_NEAR(t_plastic, t_linear, 1e-15);
+  EXPECT_EQ(a[kStressComponents], 0.0);
 }
 
 }  // namespace
