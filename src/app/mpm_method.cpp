@@ -73,6 +73,7 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
     o.load_levels = static_cast<int>(section.integer("load_levels", 10, 1, 100000));
     o.tolerance = section.real("tolerance", 1e-4, 0.0, 1.0, true, true);
     o.max_steps_per_level = section.integer("max_steps_per_level", 2000000, 1, 1000000000000LL);
+    o.level_ramp_steps = section.integer("level_ramp_steps", 0, 0, 1000000000LL);
     o.end_time = section.real("end_time", 1.0, 0.0, INFINITY, true);
     o.output_points = static_cast<int>(section.integer("output_points", 10, 1, 1000000));
     o.max_steps = section.integer("max_steps", 50000000, 1, 1000000000000LL);
@@ -141,10 +142,12 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
   } else {
     const auto& m = c.materials[0].spec;
     io::SourceLocation where{c.file, 0, 0, "materials.0"};
-    if (m.model == material::MaterialModel::neo_hookean)
-      p.material = mpm::MpmProblem::Material::neo_hookean;
-    else if (m.model != material::MaterialModel::linear_elastic)
-      problem_at(where, ".model", "linear_elastic or neo_hookean (j2_plasticity is not in this build yet)", "j2_plasticity");
+    if (m.model == material::MaterialModel::neo_hookean) p.material = mpm::MpmProblem::Material::neo_hookean;
+    if (m.model == material::MaterialModel::j2_plasticity) {
+      p.material = mpm::MpmProblem::Material::j2_plasticity;
+      p.yield_stress = m.yield_stress;
+      p.hardening = m.hardening;
+    }
     if (!m.density || !(*m.density > 0)) problem_at(where, ".density", "a positive density (mpm is an explicit dynamic method)", "none");
     p.young = m.E;
     p.poisson = m.nu;
@@ -210,14 +213,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
   try {
     return std::make_unique<mpm::MpmAnalysis>(std::move(p), model.probes);
   } catch (const InputError& e) {
-    std::vector<Diagnostic> located = e.diagnostics();
-    for (auto& d : located) {
-      if (!d.file.empty()) continue;
-      d.file = c.file;
-      if (d.key_path.rfind("discretization", 0) == 0) d.line = c.discretization_location.line, d.column = c.discretization_location.column;
-      else if (d.key_path.rfind("geometry", 0) == 0) d.line = c.geometry_location.line, d.column = c.geometry_location.column;
-    }
-    throw InputError(located);
+    throw locate(e, c);  // key paths to lines (discretization / geometry errors: their section's line)
   }
 }
 

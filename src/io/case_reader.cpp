@@ -609,6 +609,7 @@ Case CaseReader::read() {
       if (probe.field == "energy") probe.component = e.word("component", kEnergyComponents, "total");
       else if (probe.field == "eigenvalue") probe.component = std::to_string(e.integer("component", 1, 1, 1000));
       else if (probe.field == "approximation") probe.component = e.word("component", {"value", "x", "y", "z", "xx", "yy", "zz", "xy", "yz", "zx"}, "value");
+      else if (probe.field == "plastic_strain") probe.component = e.word("component", {"value", "max"}, "value");
       else probe.component = e.word("component", kComponents, std::nullopt);
       if (e.has("at")) {
         Vec3 at = e.vec3("at", Vec3::Zero());
@@ -616,7 +617,8 @@ Case CaseReader::read() {
       }
       if (e.has("set")) probe.set = e.string("set", "");
       if (e.has("select")) probe.select = read_selection(e.child("select"));
-      const bool needs_point = probe.field != "reaction_force" && probe.field != "energy" && probe.field != "eigenvalue";
+      const bool needs_point = probe.field != "reaction_force" && probe.field != "energy" && probe.field != "eigenvalue" &&
+                               !(probe.field == "plastic_strain" && probe.component == "max");
       if (probe.field == "reaction_force" && !e.has("select") && !e.has("set"))
         e.error("a select: (or set:) for a reaction_force probe", "none");
       if (needs_point && !e.has("at") && !probe.field.empty())

@@ -55,6 +55,12 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   const ShellMesh& mesh = problem_.mesh;
   const MpmOptions& o = problem_.options;
   if (!(problem_.density > 0)) throw InputError("materials.0.density", "a positive density (mpm is a dynamic method)", "none or <= 0");
+  if (problem_.material == MpmProblem::Material::j2_plasticity && !(problem_.yield_stress > 0))
+    throw InputError("materials.0.yield", "a positive yield stress", fmt::format("{}", problem_.yield_stress));
+  for (std::size_t k = 0; k < probes_.size(); ++k)
+    if (probes_[k].field == "plastic_strain" && problem_.material != MpmProblem::Material::j2_plasticity)
+      throw InputError(fmt::format("probes.{}.field", k), "a field of this material (plastic_strain needs model: j2_plasticity)",
+                       "plastic_strain");
   if (!(mesh.thickness > 0)) throw InputError("geometry.thickness", "a positive shell thickness", fmt::format("{}", mesh.thickness));
   if (problem_.poisson <= -1.0 || problem_.poisson >= 0.5 || !(problem_.young > 0))
     throw InputError("materials.0", "E > 0 and -1 < nu < 0.5", fmt::format("E = {}, nu = {}", problem_.young, problem_.poisson));
@@ -93,6 +99,9 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
 
   if (problem_.material == MpmProblem::Material::neo_hookean)
     material_ = std::make_unique<shell::NeoHookeanShellMaterial>(problem_.young, problem_.poisson, problem_.density);
+  else if (problem_.material == MpmProblem::Material::j2_plasticity)
+    material_ = std::make_unique<shell::J2PlasticShellMaterial>(problem_.young, problem_.poisson, problem_.density,
+                                                                problem_.yield_stress, problem_.hardening);
   else
     material_ = std::make_unique<shell::LinearElasticShellMaterial>(problem_.young, problem_.poisson, problem_.density);
   element_ = std::make_unique<shell::BelytschkoTsayShell>(problem_.section, *material_);
@@ -478,12 +487,14 @@ void MpmAnalysis::run(OutputSink& sink) {
   if (o.analysis == MpmOptions::Kind::quasi_static) {
     sink.output_point(0, 0.0, 0.0);
     for (int level = 1; level <= o.load_levels; ++level) {
-      const Real load = static_cast<Real>(level) / o.load_levels;
+      const Real load = static_cast<Real>(level) / o.load_levels, previous = static_cast<Real>(level - 1) / o.load_levels;
       Index level_steps = 0;
       while (true) {
-        advance(load);
+        const bool ramping = level_steps < o.level_ramp_steps;
+        advance(ramping ? previous + (load - previous) * static_cast<Real>(level_steps + 1) / static_cast<Real>(o.level_ramp_steps)
+                        : load);
         ++level_steps;
-        if (level_steps > 2 && residual_ratio_ < o.tolerance) break;
+        if (!ramping && level_steps > 2 && residual_ratio_ < o.tolerance) break;
         if (level_steps >= o.max_steps_per_level) {
           unconverged_levels_.push_back(level);
           break;
@@ -544,6 +555,14 @@ Real MpmAnalysis::probe(const Probe& p) const {
     for (Index i : p.nodes) sum += f_int_.col(i) - f_ext_.col(i);
     return component_of(sum);
   }
+  if (p.field == "plastic_strain") {
+    if (p.component == "max") {
+      Real worst = 0.0;
+      for (Index e = 0; e < problem_.mesh.element_count(); ++e) worst = std::max(worst, element_plastic_strain(e));
+      return worst;
+    }
+    return nodal_plastic_strain(nearest());
+  }
   if (p.field == "energy") {
     if (p.component == "internal") return energy_.internal;
     if (p.component == "kinetic") return energy_.kinetic;
@@ -555,7 +574,23 @@ Real MpmAnalysis::probe(const Probe& p) const {
     if (p.component == "contact") return 0.0;
     throw InputError("probes." + p.name + ".component", "internal, kinetic, external, hourglass, damping, transfer, total or contact", p.component);
   }
-  throw InputError("probes." + p.name + ".field", "displacement, velocity, rotation_velocity, reaction_force or energy (mpm)", p.field);
+  throw InputError("probes." + p.name + ".field",
+                   "displacement, velocity, rotation_velocity, reaction_force, plastic_strain or energy (mpm)", p.field);
+}
+
+Real MpmAnalysis::element_plastic_strain(Index e) const {
+  Real worst = 0.0;
+  const int stride = element_->point_stride();
+  for (int q = 0; q < element_->thickness_points(); ++q)
+    worst = std::max(worst, material_->plastic_strain(stress_.col(e).data() + q * stride));
+  return worst;
+}
+
+Real MpmAnalysis::nodal_plastic_strain(Index i) const {
+  const Index begin = incidence_begin_[static_cast<std::size_t>(i)], end = incidence_begin_[static_cast<std::size_t>(i + 1)];
+  Real sum = 0.0;
+  for (Index k = begin; k < end; ++k) sum += element_plastic_strain(incidence_[static_cast<std::size_t>(k)] / 4);
+  return end > begin ? sum / static_cast<Real>(end - begin) : 0.0;
 }
 
 std::map<std::string, Real> MpmAnalysis::builtin_probes() const {
@@ -613,6 +648,12 @@ OutputFrame MpmAnalysis::frame() const {
   f.point_fields.push_back(std::move(thickness));
   f.point_fields.push_back(std::move(membrane));
   f.point_fields.push_back(std::move(moment));
+  if (material_->is_plastic()) {
+    // equivalent plastic strain: per element the largest over the through-thickness points, averaged to the nodes
+    PointField plastic{"plastic_strain", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
+    for (Index i = 0; i < n; ++i) plastic.values[static_cast<std::size_t>(i)] = nodal_plastic_strain(i);
+    f.point_fields.push_back(std::move(plastic));
+  }
   return f;
 }
 

@@ -70,6 +70,10 @@ class MpmAnalysis : public Analysis {
   const std::string& time_step_control() const { return dt_control_; }
   const std::vector<Real>& level_residuals() const { return level_residual_; }
   const std::vector<int>& unconverged_levels() const { return unconverged_levels_; }
+  /// Equivalent plastic strain of element e: the largest over its through-thickness points (0 if elastic).
+  Real element_plastic_strain(Index e) const;
+  /// Node value: the mean of element_plastic_strain over the elements at node i.
+  Real nodal_plastic_strain(Index i) const;
 
  private:
   void compute_internal_forces(Real dt_stress);

@@ -55,14 +55,19 @@ struct MpmOptions {
   Real mass_damping = 0.0;        // c in f = -c m v, m_rot = -c I omega (1/time)
   Real tolerance = 1e-4;          // quasi-static: residual ratio that ends a load level
   Index max_steps_per_level = 2000000;
+  /// quasi-static: steps over which the load factor rises linearly from one level to the next (0: a
+  /// step change). A ramp keeps path-dependent materials (j2_plasticity) from yielding under the
+  /// dynamic overshoot of a sudden increment (a reflected step wave doubles the stress).
+  Index level_ramp_steps = 0;
   Index max_steps = 50000000;     // dynamic
 };
 
 struct MpmProblem {
   ShellMesh mesh;
-  enum class Material { linear_elastic, neo_hookean };
-  Material material = Material::linear_elastic;  // corotational linear elastic or neo-Hookean plane stress
+  enum class Material { linear_elastic, neo_hookean, j2_plasticity };
+  Material material = Material::linear_elastic;  // corotational linear elastic, neo-Hookean or J2 plane stress
   Real young = 0.0, poisson = 0.0, density = 0.0;
+  Real yield_stress = 0.0, hardening = 0.0;      // j2_plasticity: sigma_y = yield_stress + hardening * eps_p
   shell::ShellSection section;
   std::vector<NodalConstraint> constraints;
   std::vector<NodalLoad> loads;
