@@ -156,7 +156,7 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   element_force_ = element_moment_ = Eigen::Matrix<Real, 12, Eigen::Dynamic>::Zero(12, e_count);
   grid_.locate(x_);
   prepare_loads();
-  energy_.kinetic = 0.5 * (v_.colwise().squaredNorm() * mass_)(0);
+  energy_.kinetic = energy_.initial_kinetic = 0.5 * (v_.colwise().squaredNorm() * mass_)(0);
 }
 
 void MpmAnalysis::compute_internal_forces(Real dt_stress) {

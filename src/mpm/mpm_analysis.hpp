@@ -35,10 +35,14 @@ namespace lamina::mpm {
 struct EnergyBalance {
   Real kinetic = 0, internal = 0, hourglass = 0, external = 0, damping = 0;
   Real transfer = 0;  // kinetic energy lost in the grid transfer (PIC part of G2P), >= 0
-  /// kinetic + internal + hourglass + damping + transfer - external (0 = balanced).
-  Real total() const { return kinetic + internal + hourglass + damping + transfer - external; }
-  /// (kinetic + internal + hourglass + damping + transfer) / external work (1 = balanced).
-  Real ratio() const { return external != 0 ? (kinetic + internal + hourglass + damping + transfer) / external : 1.0; }
+  Real initial_kinetic = 0;  // kinetic energy of the initial velocities (an energy input like the external work)
+  /// kinetic + internal + hourglass + damping + transfer - external - initial kinetic (0 = balanced).
+  Real total() const { return kinetic + internal + hourglass + damping + transfer - external - initial_kinetic; }
+  /// (kinetic + internal + hourglass + damping + transfer) / (external work + initial kinetic) (1 = balanced).
+  Real ratio() const {
+    const Real input = external + initial_kinetic;
+    return input != 0 ? (kinetic + internal + hourglass + damping + transfer) / input : 1.0;
+  }
 };
 
 class MpmAnalysis : public Analysis {
