@@ -86,7 +86,9 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
   sigma[4] += dt * g * rate[4];
   const auto von_mises = [](Real a, Real b, Real s) { return std::sqrt(std::max(0.0, a * a - a * b + b * b + 3.0 * s * s)); };
   Real plastic_zz = 0.0;
-  if (von_mises(sxx, syy, sxy) > yield_ + hardening_ * eps_p) {
+  const Real trial_von_mises = von_mises(sxx, syy, sxy);
+  // (a non-finite trial is left as it is: the analysis stops on the non-finite energy it causes)
+  if (std::isfinite(trial_von_mises) && trial_von_mises > yield_ + hardening_ * eps_p) {
     // return in the eigenbasis of C and P (seed-independent; Simo & Hughes 3.4)
     const Real xi1 = (sxx + syy) / std::sqrt(2.0), xi2 = (syy - sxx) / std::sqrt(2.0), xi3 = sxy;
     const Real k1 = E / (3.0 * (1.0 - nu)), k2 = 2.0 * g;
@@ -102,7 +104,7 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
     };
     // bracket: residual(0) > 0 and residual decreases; grow hi until the sign changes
     Real lo = 0.0, hi = 1.0 / k2, slope = 0.0;
-    while (residual(hi, slope) > 0.0) hi *= 2.0;
+    for (int doubling = 0; doubling < 200 && residual(hi, slope) > 0.0; ++doubling) hi *= 2.0;
     Real dg = 0.0;
     for (int iteration = 0; iteration < 100; ++iteration) {
       const Real r = residual(dg, slope);
