@@ -657,6 +657,26 @@ OutputFrame MpmAnalysis::frame() const {
   return f;
 }
 
+std::vector<std::string> MpmAnalysis::warnings() const {
+  std::vector<std::string> out;
+  if (problem_.material != MpmProblem::Material::j2_plasticity) return out;
+  const shell::ShellSection& s = problem_.section;
+  if (s.thickness_points <= 3)
+    out.push_back(fmt::format("shell.thickness_points = {} with j2_plasticity: so few points cannot represent plastic "
+                              "bending (3 Lobatto points carry at most the first-yield moment, a real section 1.5 x); use 7",
+                              s.thickness_points));
+  if (problem_.options.analysis == MpmOptions::Kind::quasi_static && problem_.options.level_ramp_steps == 0)
+    out.push_back("mpm.level_ramp_steps = 0 with j2_plasticity: each load increment is applied at once and its dynamic "
+                  "overshoot yields the material early; ramp it over a few thousand steps");
+  const Real membrane = s.hourglass_membrane >= 0.0 ? s.hourglass_membrane : s.hourglass;
+  if (membrane >= 0.05)
+    out.push_back(fmt::format("shell hourglass coefficient {:g} on the membrane modes with j2_plasticity: the elastic "
+                              "hourglass resistance stiffens plastic folds (crush forces too high, watch hourglass_ratio); "
+                              "shell.hourglass_membrane: 0.01 to 0.03 is usual for crush",
+                              membrane));
+  return out;
+}
+
 RunCounts MpmAnalysis::counts() const {
   RunCounts c;
   c.nodes = x_.cols();

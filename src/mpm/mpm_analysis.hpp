@@ -58,6 +58,10 @@ class MpmAnalysis : public Analysis {
   OutputFrame frame() const override;
   RunCounts counts() const override;
   std::map<std::string, Real> timings() const override;
+  /// j2_plasticity set-ups that run but mislead: 3 or fewer thickness points (the section cannot carry
+  /// much more than the first-yield moment), sudden quasi-static increments (early yield from the
+  /// overshoot), a membrane hourglass coefficient of 0.05 or more (stiffens plastic folds).
+  std::vector<std::string> warnings() const override;
 
   /// One explicit step at load factor `load` (quasi-static) or the current time (dynamic).
   /// Returns the step size used. Throws AnalysisError on instability.

@@ -21,13 +21,14 @@ struct Outcome {
   std::string output;
 };
 
-Outcome run_case(const std::string& name, const std::string& yaml, const std::string& extra = "") {
+Outcome run_case(const std::string& name, const std::string& yaml, const std::string& extra = "", bool check_only = false) {
   const fs::path dir = fs::temp_directory_path() / ("lamina_mpm_test_" + name);
   fs::create_directories(dir);
   const fs::path file = dir / (name + ".yaml");
   std::ofstream(file) << yaml;
-  const std::string command = std::string(LAMINA_BINARY) + " run " + file.string() + " -o " + (dir / "out").string() +
-                              " --quiet --threads 1 " + extra + " 2>&1";
+  const std::string command = check_only ? std::string(LAMINA_BINARY) + " check " + file.string() + " " + extra + " 2>&1 >/dev/null"
+                                         : std::string(LAMINA_BINARY) + " run " + file.string() + " -o " + (dir / "out").string() +
+                                               " --quiet --threads 1 " + extra + " 2>&1";
   Outcome o;
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
   std::array<char, 4096> buffer{};
@@ -137,6 +138,31 @@ probes:
   EXPECT_GT(internal, 1e-4 * (internal + kinetic));  // it has deformed
   EXPECT_LT(std::abs(total), 0.01 * (internal + kinetic));
   EXPECT_NEAR(summary_value("initial_velocity", "energy_ratio"), 1.0, 0.01);
+}
+
+TEST(mpm_Cases, PlasticSetUpsThatMisleadAreWarnedAbout) {
+  const std::string yaml = R"(
+title: plastic strip
+method: mpm
+materials:
+  - {name: s, model: j2_plasticity, E: 2.0e5, nu: 0.3, density: 7.85e-9, yield: 200}
+geometry: {type: plate, min: [0, 0], max: [100, 10], thickness: 1.0}
+discretization: {elements: [10, 2]}
+boundary:
+  - {select: {set: xmin}, fix: [x, y, z, rx, ry, rz]}
+loads:
+  - {select: {set: xmax}, traction: [250, 0, 0]}
+)";
+  const Outcome plain = run_case("plastic_warnings", yaml, "", true);
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_NE(plain.output.find("warning: shell.thickness_points = 3"), std::string::npos) << plain.output;
+  EXPECT_NE(plain.output.find("warning: mpm.level_ramp_steps = 0"), std::string::npos) << plain.output;
+  EXPECT_NE(plain.output.find("shell.hourglass_membrane"), std::string::npos) << plain.output;
+  const Outcome advised = run_case("plastic_warnings_advised", yaml,
+                                   "--set shell.thickness_points=7 --set shell.hourglass_membrane=0.02 --set mpm.level_ramp_steps=2000",
+                                   true);
+  ASSERT_EQ(advised.exit_code, 0) << advised.output;
+  EXPECT_EQ(advised.output.find("warning"), std::string::npos) << advised.output;
 }
 
 }  // namespace
