@@ -33,6 +33,7 @@ CsvTable CsvTable::read(const std::string& path) {
     std::vector<std::string> cells;
     std::stringstream ss(t);
     for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(trim(cell));
+    if (t.back() == ',') cells.emplace_back();  // a trailing empty cell (getline stops before it)
     if (table.columns.empty()) {
       table.columns = cells;
       continue;
