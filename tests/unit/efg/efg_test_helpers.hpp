@@ -59,6 +59,19 @@ inline geometry::GeometrySpec curved_beam_spec() {
   return g;
 }
 
+/// A full (360-degree) cylinder along `axis` (0 = x, 1 = y, 2 = z) from 0 to length; a tube wall of
+/// mid-surface radius `radius` if thickness > 0, else solid.
+inline geometry::GeometrySpec cylinder_spec(Real radius, Real length, int axis, Real thickness = 0.0) {
+  geometry::GeometrySpec g;
+  g.type = geometry::GeometryType::cylinder;
+  g.radius = radius;
+  g.length = length;
+  g.axis = axis;
+  g.thickness = thickness;
+  g.angle_deg = 360.0;
+  return g;
+}
+
 /// A body with nodes and one material, no conditions yet.
 inline EfgProblem make_problem(const geometry::GeometrySpec& g, const std::array<int, 3>& nodes, Real E, Real nu) {
   EfgProblem p;
@@ -130,6 +143,23 @@ inline EfgProblem patch_problem(int n, Real jitter) {
   for (int a = 0; a < 3; ++a) c.value[static_cast<std::size_t>(a)] = field(linear_field()[static_cast<std::size_t>(a)]);
   p.constraints.push_back(c);
   return p;
+}
+
+/// Zero values of the given components on the named node set.
+inline void fix_set(EfgProblem& p, const std::string& name, const std::array<bool, 3>& components = {true, true, true}) {
+  EssentialCondition c;
+  c.region = set(name, p.cloud);
+  c.constrained = components;
+  p.constraints.push_back(c);
+}
+
+/// A constant traction on the boundary faces of the named node set.
+inline void traction_on_set(EfgProblem& p, const std::string& name, const Vec3& t) {
+  EfgLoad load;
+  load.kind = EfgLoad::Kind::traction;
+  load.region = set(name, p.cloud);
+  load.vector = {constant(t.x()), constant(t.y()), constant(t.z())};
+  p.loads.push_back(load);
 }
 
 }  // namespace lamina::efg::testing

@@ -12,15 +12,8 @@ using namespace testing;
 
 EfgProblem cantilever() {
   EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(4, 1, 1)), {9, 3, 3}, 1e4, 0.3);
-  EssentialCondition clamp;
-  clamp.region = set("xmin", p.cloud);
-  clamp.constrained = {true, true, true};
-  p.constraints.push_back(clamp);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::traction;
-  load.region = set("xmax", p.cloud);
-  load.vector = {constant(0.0), constant(-1.0), constant(0.0)};
-  p.loads.push_back(load);
+  fix_set(p, "xmin");
+  traction_on_set(p, "xmax", Vec3(0, -1, 0));
   p.options.mls.basis = mls::Basis::quadratic;
   p.options.mls.kappa = 2.5;
   return p;
@@ -126,14 +119,7 @@ TEST(EfgErrors, NearlyIncompressibleMaterialRunsWithoutNaN) {
 
 /// A tube wall (radius 1, thickness 0.1, length 10 along x) with node counts in the given order.
 EfgProblem tube(const std::array<int, 3>& nodes, mls::SupportShape shape) {
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::cylinder;
-  g.radius = 1.0;
-  g.length = 10.0;
-  g.axis = 0;
-  g.thickness = 0.1;
-  g.angle_deg = 360.0;
-  EfgProblem p = make_problem(g, nodes, 1e4, 0.3);
+  EfgProblem p = make_problem(cylinder_spec(1.0, 10.0, 0, 0.1), nodes, 1e4, 0.3);
   p.options.mls.basis = mls::Basis::quadratic;
   p.options.mls.shape = shape;
   p.options.mls.kappa = shape == mls::SupportShape::sphere ? 2.5 : 2.0;

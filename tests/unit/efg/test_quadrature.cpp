@@ -47,16 +47,7 @@ geometry::GeometrySpec box_spec() {
   return g;
 }
 
-geometry::GeometrySpec tube_spec() {
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::cylinder;
-  g.radius = 2;
-  g.thickness = 0.2;
-  g.length = 3;
-  g.axis = 2;
-  g.angle_deg = 360;
-  return g;
-}
+geometry::GeometrySpec tube_spec() { return testing::cylinder_spec(2.0, 3.0, 2, 0.2); }
 
 geometry::GeometrySpec cap_spec() {
   geometry::GeometrySpec g;

@@ -228,12 +228,7 @@ TEST(StrongFormBarLoads, PressureOnAWhereSelectionLoadsOnlyItsFace) {
 TEST(StrongFormCurvedFaces, RoundBarInTensionIsExact) {
   // solid cylinder (radius 1, length 4, axis x): the exact uniaxial field prescribed on end0, unit
   // traction on end1 (its centre node sits on the collapsed axis), the curved outer face free
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::cylinder;
-  g.radius = 1.0;
-  g.length = 4.0;
-  g.axis = 0;
-  g.angle_deg = 360.0;
+  const geometry::GeometrySpec g = cylinder_spec(1.0, 4.0, 0);
   for (Formulation f : {Formulation::collocation, Formulation::weighted_least_squares}) {
     EfgProblem p = make_problem(g, {4, 12, 9}, 1e4, 0.25);
     p.options.formulation = f;
@@ -338,15 +333,8 @@ TEST(StrongFormErrors, FreeRigidBodyMotionIsAnAnalysisError) {
     EfgProblem p = make_problem(box(Vec3::Zero(), Vec3::Ones()), {5, 5, 5}, 1.0, 0.25);
     p.options.formulation = f;
     p.options.mls.kappa = 2.5;
-    EssentialCondition c;
-    c.region = set("xmin", p.cloud);
-    c.constrained = {true, false, false};
-    p.constraints.push_back(c);
-    EfgLoad t;
-    t.kind = EfgLoad::Kind::traction;
-    t.region = set("xmax", p.cloud);
-    t.vector = {constant(1.0), constant(0.0), constant(0.0)};
-    p.loads.push_back(t);
+    fix_set(p, "xmin", {true, false, false});
+    traction_on_set(p, "xmax", Vec3(1, 0, 0));
     EfgAnalysis a(p, {});
     EXPECT_THROW(a.solve(), AnalysisError) << to_string(f);
   }

@@ -162,15 +162,8 @@ TEST(VolumetricProjection, CurvedBodyIsCoveredByThePressureFunctions) {
   p.options.mls.kappa = 3.0;
   p.options.gauss = {3, 3, 3};
   p.options.projected_volumetric = true;
-  EssentialCondition clamp;
-  clamp.region = set("start", p.cloud);
-  clamp.constrained = {true, true, true};
-  p.constraints.push_back(clamp);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::traction;
-  load.region = set("end", p.cloud);
-  load.vector = {constant(0.0), constant(-25.0), constant(0.0)};
-  p.loads.push_back(load);
+  fix_set(p, "start");
+  traction_on_set(p, "end", Vec3(0, -25, 0));
   EfgAnalysis a(p, {});
   a.solve();
   const Real tip = a.displacement_at(Vec3(0, 4, 0))[1];
