@@ -191,10 +191,10 @@ def main():
     nodes = (21, 21, 5) if args.quick else (41, 41, 5)
     bench = []
 
-    # the validation case's support (box kappa 3) and the seed's recommended box support (kappa 2.0,
-    # here 2.01 so that nodes at exactly 2 h count): the assembly work grows with the square of the
+    # the validation case's support (box kappa 3, radius 3.1 h) and the seed's recommended box support (kappa 2.0,
+    # radius 2.1 h, the seed's s + delta): the assembly work grows with the square of the
     # number of neighbours per Gauss point (about 200 and 64 in the plate's interior)
-    for kappa, suffix in ((None, ""), (2.01, "_kappa2")):
+    for kappa, suffix in ((None, ""), (2.0, "_kappa2")):
         label = "box kappa 3 (validation case)" if kappa is None else f"box kappa {kappa} (seed's recommended support)"
         print(f"1. lamina EFG, R1a at {nodes[0]}x{nodes[1]}x{nodes[2]} nodes, {label}", flush=True)
         for threads in sorted({1, args.threads}):

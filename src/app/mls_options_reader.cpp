@@ -51,6 +51,8 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
       } else {
         o.kappa = support.real("kappa", shape == "sphere" ? 2.5 : 2.0, 0.0, 100.0, true);
       }
+      if (shape == "box") o.delta = support.real("delta", mls::default_support_delta, 0.0, 1.0, false);
+      else if (support.has("delta")) support.child("delta").error("no delta for a sphere support (box supports only: radius (kappa + delta) h)");
     }
     if (o.mode == mls::SupportMode::fixed_radius) {
       Vec3 r = support.vec3("radius", std::nullopt);

@@ -212,6 +212,7 @@ void EfgAnalysis::setup() {
     pressure.shape = mls::SupportShape::box;
     pressure.mode = mls::SupportMode::kappa;
     pressure.kappa = problem_.options.pressure_kappa;
+    pressure.delta = 0.0;  // pressure_kappa is the bare radius factor (no seed s + delta convention)
     pressure.kappa_axes = Vec3::Zero();
     pressure.interface_enrichment = false;
     pressure.singular_remedy = false;

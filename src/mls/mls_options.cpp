@@ -24,7 +24,11 @@ void MlsOptions::validate() const {
   require(std::isfinite(gauss_beta) && gauss_beta > 0.0, "gauss_beta", "a positive number",
           fmt::format("{}", gauss_beta), problems);
   if (mode == SupportMode::kappa)
+  {
     require(std::isfinite(kappa) && kappa > 0.0, "kappa", "a positive number", fmt::format("{}", kappa), problems);
+    require(std::isfinite(delta) && delta >= 0.0 && delta <= 1.0, "delta", "a number in [0, 1] (nodal spacings)",
+            fmt::format("{}", delta), problems);
+  }
   if (interface_enrichment)
     require(interface_point.allFinite() && interface_normal.allFinite() && std::abs(interface_normal.norm() - 1.0) < 1e-12,
             "interface", "a finite point and a unit normal", "a non-finite point or a normal that is not a unit vector",

@@ -249,9 +249,9 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
       radii_ = Eigen::Matrix3Xd::Zero(3, count);
       for (Index i = 0; i < count; ++i) {
         if (options_.shape == SupportShape::box && options_.kappa_axes != Vec3::Zero()) {
-          radii_.col(i).head(dimension) = widen * options_.kappa_axes.head(dimension).cwiseProduct(spacing_.col(i).head(dimension));
+          radii_.col(i).head(dimension) = widen * (options_.kappa_axes.head(dimension).array() + options_.delta).matrix().cwiseProduct(spacing_.col(i).head(dimension));
         } else if (options_.shape == SupportShape::box) {
-          radii_.col(i).head(dimension) = options_.kappa * widen * spacing_.col(i).head(dimension);
+          radii_.col(i).head(dimension) = (options_.kappa + options_.delta) * widen * spacing_.col(i).head(dimension);
         } else {
           radii_.col(i).head(dimension).setConstant(options_.kappa * widen * spacing_.col(i).head(dimension).maxCoeff());
         }

@@ -136,7 +136,8 @@ TEST(MlsNeighbours, PerAxisKappaSetsBoxRadiiAxisByAxis) {
   const MlsShapeFunctions shape_functions(nodes, options, spacing);
   for (Index i = 0; i < nodes.cols(); ++i)
     for (int d = 0; d < 3; ++d)
-      EXPECT_NEAR(shape_functions.support_radii()(d, i), options.kappa_axes[d] * h * (1.0 + support_epsilon), 1e-15);
+      EXPECT_NEAR(shape_functions.support_radii()(d, i),
+                  (options.kappa_axes[d] + options.delta) * h * (1.0 + support_epsilon), 1e-15);
   const PointMatrix queries = random_points(60, Vec3::Constant(0.1), Vec3(0.7, 0.7, 0.15), 3, 12);
   for (Index q = 0; q < queries.cols(); ++q) {
     const ShapeFunctionValues values = shape_functions.evaluate(queries.col(q), 1);
