@@ -32,8 +32,9 @@ PointCloud cloud_of(const std::vector<Vec3>& points, const geometry::GeometrySpe
   return cloud;
 }
 
-PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec& spec) {
+PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec& spec, const std::string& key) {
   std::ifstream in(path);
+  if (!in) throw InputError(Diagnostic{path, 0, 0, key, "a readable CSV file of x,y,z", "a file that cannot be opened"});
   std::vector<Vec3> points;
   std::string line;
   int line_number = 0;
@@ -46,11 +47,11 @@ PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec&
     Vec3 p;
     if (!(fields >> p.x() >> p.y() >> p.z())) {
       if (points.empty()) continue;  // a header line
-      throw InputError(Diagnostic{path, line_number, 1, "discretization.nodes.file", "x, y, z numbers", "'" + line + "'"});
+      throw InputError(Diagnostic{path, line_number, 1, key, "x, y, z numbers", "'" + line + "'"});
     }
     points.push_back(p);
   }
-  if (points.empty()) throw InputError(Diagnostic{path, 0, 0, "discretization.nodes.file", "at least one node", "none"});
+  if (points.empty()) throw InputError(Diagnostic{path, 0, 0, key, "at least one node", "none"});
   return cloud_of(points, spec);
 }
 
@@ -149,7 +150,7 @@ Model build_point_model_unlocated(const io::Case& c) {
   } else if (c.geometry.type == geometry::GeometryType::mesh) {
     model.cloud = geometry::import_gmsh(c.geometry.file).cloud;
   } else if (d.nodes_file) {
-    model.cloud = read_nodes_csv(*d.nodes_file, c.geometry);
+    model.cloud = read_nodes_csv(*d.nodes_file, c.geometry, "discretization.nodes.file");
   } else if (d.node_coordinates) {
     model.cloud = cloud_of(*d.node_coordinates, c.geometry);
   } else if (d.spacing) {  // pd: cell-centred lattice over a box or plate
@@ -171,7 +172,7 @@ Model build_point_model_unlocated(const io::Case& c) {
   } else if (d.particles) {  // 2D particle methods (mpfem): one layer in the generator's third direction
     model.cloud = geometry::generate_volume_nodes(c.geometry, {(*d.particles)[0], (*d.particles)[1], 1});
   } else if (d.particles_file) {
-    model.cloud = read_nodes_csv(*d.particles_file, c.geometry);
+    model.cloud = read_nodes_csv(*d.particles_file, c.geometry, "discretization.particles.file");
   } else {
     // reported where the key is missing: the discretization mapping, or the document's root
     throw InputError(Diagnostic{c.file, c.discretization_location.line, c.discretization_location.column,

@@ -501,7 +501,12 @@ Case CaseReader::read() {
     if (allowed("particles") && d.has("particles")) {
       NodeReader p = d.child("particles");
       if (p.is_map()) {
-        disc.particles_file = p.string("file", std::nullopt);
+        std::string file = p.string("file", std::nullopt);
+        std::filesystem::path resolved(file);  // relative to the case file, as every file a case names
+        if (resolved.is_relative()) resolved = std::filesystem::path(path_).parent_path() / resolved;
+        disc.particles_file = resolved.string();
+        if (!file.empty() && !std::filesystem::exists(resolved))
+          p.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", resolved.string()));
         p.reject_unknown_keys();
       } else if (auto counts = p.as_integers(2)) {
         if ((*counts)[0] < 2 || (*counts)[1] < 2)
