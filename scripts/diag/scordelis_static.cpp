@@ -1,6 +1,11 @@
 // Diagnostic: static linear FE solve of the Scordelis-Lo quarter roof with the BT element's tangent
 // stiffness built column by column from its internal force (zero initial stress, unit nodal rate, dt = 1:
 // f = K u exactly for the linear material). No background grid, no dynamics.
+// Build: g++ -std=c++20 -O2 -march=x86-64-v3 -ffp-contract=off -DFMT_SHARED -I src -I build/generated -isystem /usr/include/eigen3
+//        scripts/diag/scordelis_static.cpp build/liblamina_shell.a build/liblamina_core.a -lfmt -fopenmp -o /tmp/sstat
+// (the flags must match the library's: Eigen's fixed-size layout depends on -march)
+// Usage: sstat n_circ n_axial [hourglass hg_bending hg_membrane hg_transverse [p|h]]  (p: flat Navier plate, h: theta_y = 0 on the diaphragm)
+// KIRCHHOFF=1 in the environment: transverse_hourglass kirchhoff.
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
@@ -13,7 +18,8 @@ int main(int argc, char** argv) {
   const int nc = argc > 1 ? std::atoi(argv[1]) : 6, na = argc > 2 ? std::atoi(argv[2]) : nc;
   const double hg = argc > 3 ? std::atof(argv[3]) : 0.1, hgb = argc > 4 ? std::atof(argv[4]) : -1.0;
   const double hgm = argc > 5 ? std::atof(argv[5]) : -1.0, hgw = argc > 6 ? std::atof(argv[6]) : -1.0;
-  const bool plate = argc > 7 && argv[7][0] == 'p';  // square plate 10 x 10, simply supported, quarter
+  const bool plate = argc > 7 && argv[7][0] == 'p';  // square plate 10 x 10, simply supported (soft), quarter
+  const bool hard = argc > 7 && argv[7][0] == 'h';   // also theta_y = 0 on the diaphragm
   const double R = 25, L = 25, phi = 40.0 * M_PI / 180.0, t = 0.25, E = 4.32e8, q = 90;
   LinearElasticShellMaterial mat(E, 0.0, 1.0);
   ShellSection sec;
@@ -21,6 +27,7 @@ int main(int argc, char** argv) {
   sec.hourglass_bending = hgb;
   sec.hourglass_membrane = hgm;
   sec.hourglass_transverse = hgw;
+  sec.kirchhoff_transverse_hourglass = std::getenv("KIRCHHOFF") != nullptr;
   BelytschkoTsayShell el(sec, mat);
   const int nn = (nc + 1) * (na + 1), ndof = 6 * nn;
   std::vector<Vec3> X(nn);
@@ -72,6 +79,7 @@ int main(int argc, char** argv) {
         continue;
       }
       if (j == 0) fixed[6 * n + 0] = fixed[6 * n + 2] = 1;                          // diaphragm u_x = u_z = 0
+      if (j == 0 && hard) fixed[6 * n + 4] = 1;                                  // and theta_y = 0 (MacNeal-Harder)
       if (j == na) fixed[6 * n + 1] = fixed[6 * n + 3] = fixed[6 * n + 5] = 1;      // y symmetry
       if (i == 0) fixed[6 * n + 0] = fixed[6 * n + 4] = fixed[6 * n + 5] = 1;       // x symmetry
     }
