@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   Eigen::VectorXd Ff(fr.size());
   for (size_t a = 0; a < fr.size(); ++a) { Ff(a) = F(fr[a]); for (size_t b = 0; b < fr.size(); ++b) Kf(a, b) = K(fr[a], fr[b]); }
   // tiny drilling regularisation: singular drilling modes of nodes whose elements are coplanar
-  const double kd = 1e-9 * Kf.diagonal().maxCoeff();
+  const double kd = (std::getenv("KDRILL") ? std::atof(std::getenv("KDRILL")) : 1e-9) * Kf.diagonal().maxCoeff();
   Eigen::MatrixXd Kr = Kf + kd * Eigen::MatrixXd::Identity(fr.size(), fr.size());
   Eigen::VectorXd uf = Kr.ldlt().solve(Ff);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(ndof);
