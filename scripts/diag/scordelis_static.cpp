@@ -1,9 +1,8 @@
 // Diagnostic: static linear FE solve of the Scordelis-Lo quarter roof with the BT element's tangent
 // stiffness built column by column from its internal force (zero initial stress, unit nodal rate, dt = 1:
 // f = K u exactly for the linear material). No background grid, no dynamics.
-// Build: g++ -std=c++20 -O2 -march=x86-64-v3 -ffp-contract=off -DFMT_SHARED -I src -I build/generated -isystem /usr/include/eigen3
-//        scripts/diag/scordelis_static.cpp build/liblamina_shell.a build/liblamina_core.a -lfmt -fopenmp -o /tmp/sstat
-// (the flags must match the library's: Eigen's fixed-size layout depends on -march)
+// Build: cmake --build build --target scordelis_static_diagnostic (the library's flags: Eigen's
+// fixed-size layout depends on -march); run build/scordelis_static_diagnostic.
 // Usage: sstat n_circ n_axial [hourglass hg_bending hg_membrane hg_transverse [p|h]]  (p: flat Navier plate, h: theta_y = 0 on the diaphragm)
 // KIRCHHOFF=1 in the environment: transverse_hourglass kirchhoff.
 #include <Eigen/Dense>
