@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -39,12 +38,7 @@ void read_imperfection(const io::NodeReader& r, ImperfectionOptions& o) {
   o.amplitude = r.real("amplitude", std::nullopt, 0.0, INFINITY);
   if (r.has("file")) {
     o.kind = ImperfectionOptions::Kind::file;
-    o.file = r.string("file", std::nullopt);
-    // relative to the case file, as every file a case names
-    std::filesystem::path resolved(o.file);
-    if (resolved.is_relative() && !o.file.empty())
-      resolved = std::filesystem::path(r.sink().file()).parent_path() / resolved;
-    o.file = resolved.string();
+    o.file = r.file_path("file");
     std::ifstream test(o.file);
     if (!test) r.child("file").error("a readable CSV file x,y,z,ux,uy,uz", "'" + o.file + "'");
   } else {

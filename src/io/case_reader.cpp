@@ -378,13 +378,9 @@ Case CaseReader::read() {
       if (read_cleanly() && s.corner_radius >= 0.5 * s.width && s.width > 0) g.child("corner_radius").error("corner_radius < width / 2", fmt::format("{}", s.corner_radius));
     } else if (type == "mesh") {
       s.type = GeometryType::mesh;
-      std::string file = g.string("file", std::nullopt);
-      if (!file.empty()) {
-        std::filesystem::path p(file);
-        if (p.is_relative()) p = std::filesystem::path(path_).parent_path() / p;
-        s.file = p.string();
-        if (!std::filesystem::exists(p)) g.child("file").error("an existing Gmsh .msh file", "'" + p.string() + "' (no such file)");
-      }
+      s.file = g.file_path("file");
+      if (!s.file.empty() && !std::filesystem::exists(s.file))
+        g.child("file").error("an existing Gmsh .msh file", "'" + s.file + "' (no such file)");
     }
     g.reject_unknown_keys();
     geometry_clean = read_cleanly() && !type.empty();
@@ -423,11 +419,9 @@ Case CaseReader::read() {
         }
         n.reject_unknown_keys();
       } else if (n.is_map()) {
-        std::string file = n.string("file", std::nullopt);
-        std::filesystem::path p(file);
-        if (p.is_relative()) p = std::filesystem::path(path_).parent_path() / p;
-        disc.nodes_file = p.string();
-        if (!file.empty() && !std::filesystem::exists(p)) n.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", p.string()));
+        disc.nodes_file = n.file_path("file");
+        if (!disc.nodes_file->empty() && !std::filesystem::exists(*disc.nodes_file))
+          n.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", *disc.nodes_file));
         n.reject_unknown_keys();
       } else if (auto counts = n.as_integers(3)) {
         std::array<int, 3> v{};
@@ -501,12 +495,9 @@ Case CaseReader::read() {
     if (allowed("particles") && d.has("particles")) {
       NodeReader p = d.child("particles");
       if (p.is_map()) {
-        std::string file = p.string("file", std::nullopt);
-        std::filesystem::path resolved(file);  // relative to the case file, as every file a case names
-        if (resolved.is_relative()) resolved = std::filesystem::path(path_).parent_path() / resolved;
-        disc.particles_file = resolved.string();
-        if (!file.empty() && !std::filesystem::exists(resolved))
-          p.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", resolved.string()));
+        disc.particles_file = p.file_path("file");
+        if (!disc.particles_file->empty() && !std::filesystem::exists(*disc.particles_file))
+          p.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", *disc.particles_file));
         p.reject_unknown_keys();
       } else if (auto counts = p.as_integers(2)) {
         if ((*counts)[0] < 2 || (*counts)[1] < 2)

@@ -1,5 +1,6 @@
 #include "io/yaml_reader.hpp"
 
+#include <filesystem>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -364,6 +365,14 @@ std::string NodeReader::string(const std::string& key, std::optional<std::string
   NodeReader c = fallback ? child(key) : required(key);
   if (!c.defined()) return fallback.value_or(std::string());
   return c.as_string().value_or(fallback.value_or(std::string()));
+}
+
+std::string NodeReader::file_path(const std::string& key) const {
+  const std::string name = string(key, std::nullopt);
+  if (name.empty()) return name;
+  std::filesystem::path path(name);
+  if (path.is_relative()) path = std::filesystem::path(sink_->file()).parent_path() / path;
+  return path.string();
 }
 
 Vec3 NodeReader::vec3(const std::string& key, std::optional<Vec3> fallback) const {

@@ -110,6 +110,9 @@ class NodeReader {
   std::string word(const std::string& key, const std::vector<std::string>& allowed,
                    std::optional<std::string> fallback) const;
   std::string string(const std::string& key, std::optional<std::string> fallback) const;
+  /// A file name at key (required), resolved against the case file's folder unless absolute: every
+  /// file a case names is found relative to the case. Empty if the key is missing or not a string.
+  std::string file_path(const std::string& key) const;
   Vec3 vec3(const std::string& key, std::optional<Vec3> fallback) const;
 
   /// Report every key of this mapping that was never asked for ("unknown key").
