@@ -4,7 +4,8 @@
 // Build: cmake --build build --target scordelis_static_diagnostic (the library's flags: Eigen's
 // fixed-size layout depends on -march); run build/scordelis_static_diagnostic.
 // Usage: sstat n_circ n_axial [hourglass hg_bending hg_membrane hg_transverse [p|h]]  (p: flat Navier plate, h: theta_y = 0 on the diaphragm)
-// KIRCHHOFF=1 in the environment: transverse_hourglass kirchhoff.
+// KIRCHHOFF=1 in the environment: transverse_hourglass kirchhoff. hourglass < 0: the physical model (the
+// default of the code), DRILL=<factor> its drilling penalty.
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
@@ -15,7 +16,7 @@ using namespace lamina;
 using namespace lamina::shell;
 int main(int argc, char** argv) {
   const int nc = argc > 1 ? std::atoi(argv[1]) : 6, na = argc > 2 ? std::atoi(argv[2]) : nc;
-  const double hg = argc > 3 ? std::atof(argv[3]) : 0.1, hgb = argc > 4 ? std::atof(argv[4]) : -1.0;
+  const double hg = argc > 3 ? std::atof(argv[3]) : -1.0, hgb = argc > 4 ? std::atof(argv[4]) : -1.0;
   const double hgm = argc > 5 ? std::atof(argv[5]) : -1.0, hgw = argc > 6 ? std::atof(argv[6]) : -1.0;
   const bool plate = argc > 7 && argv[7][0] == 'p';  // square plate 10 x 10, simply supported (soft), quarter
   const bool hard = argc > 7 && argv[7][0] == 'h';   // also theta_y = 0 on the diaphragm
@@ -27,6 +28,8 @@ int main(int argc, char** argv) {
   sec.hourglass_membrane = hgm;
   sec.hourglass_transverse = hgw;
   sec.kirchhoff_transverse_hourglass = std::getenv("KIRCHHOFF") != nullptr;
+  sec.hourglass_model = hg < 0 ? HourglassModel::physical : HourglassModel::coefficients;
+  if (std::getenv("DRILL")) sec.drilling = std::atof(std::getenv("DRILL"));
   BelytschkoTsayShell el(sec, mat);
   const int nn = (nc + 1) * (na + 1), ndof = 6 * nn;
   std::vector<Vec3> X(nn);
@@ -55,7 +58,7 @@ int main(int argc, char** argv) {
         NodeMatrix v = NodeMatrix::Zero(), w = NodeMatrix::Zero();
         (c % 6 < 3 ? v : w)(c % 3, c / 6) = 1.0;
         std::vector<double> st(el.stress_size(), 0.0);
-        double hgs[5] = {0, 0, 0, 0, 0}, h = t;
+        double hgs[BelytschkoTsayShell::kHourglassSize] = {}, h = t;
         const ShellElementResult r = el.update(x, v, w, 1.0, st.data(), hgs, h);
         for (int a = 0; a < 4; ++a)
           for (int k = 0; k < 3; ++k) {

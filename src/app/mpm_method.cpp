@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
+
 #include "core/error.hpp"
 #include "mpm/mpm_analysis.hpp"
 
@@ -50,11 +52,27 @@ void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, sh
   io::NodeReader section(c.resolved["shell"], "shell", &mpm_section.sink());
   if (!section.defined() || !section.expect_map()) return;
   s.thickness_points = static_cast<int>(section.integer("thickness_points", 3, 1, 7));
-  s.hourglass = section.real("hourglass", 0.1, 0.0, 1.0);
+  // hourglass: `physical` (default) or a coefficient r (the seed's springs, with the per-mode keys)
+  const io::NodeReader hourglass = section.child("hourglass");
+  const bool word = hourglass.defined() && hourglass.is_scalar() && !hourglass.node().as<std::string>().empty() &&
+                    std::isalpha(static_cast<unsigned char>(hourglass.node().as<std::string>()[0]));
+  if (word) {
+    if (hourglass.as_word({"physical"})) s.hourglass_model = shell::HourglassModel::physical;
+  } else if (hourglass.defined()) {
+    s.hourglass_model = shell::HourglassModel::coefficients;
+    s.hourglass = section.real("hourglass", 0.1, 0.0, 1.0);
+  }
+  const bool coefficients = s.hourglass_model == shell::HourglassModel::coefficients;
+  for (const char* key : {"hourglass_bending", "hourglass_membrane", "hourglass_transverse", "transverse_hourglass"})
+    if (section.has(key) && !coefficients)
+      section.child(key).error(fmt::format("no {} with the physical hourglass control (the default); it belongs to the "
+                                           "coefficient springs: give shell.hourglass a coefficient (0.1 is the seed's)",
+                                           key));
   if (section.has("hourglass_bending")) s.hourglass_bending = section.real("hourglass_bending", std::nullopt, 0.0, 2.0);
   if (section.has("hourglass_membrane")) s.hourglass_membrane = section.real("hourglass_membrane", std::nullopt, 0.0, 2.0);
   if (section.has("hourglass_transverse"))
     s.hourglass_transverse = section.real("hourglass_transverse", std::nullopt, 0.0, 2.0);
+  s.drilling = section.real("drilling", 0.01, 0.0, 1.0);
   s.shear_factor = section.real("shear_factor", 5.0 / 6.0, 0.0, 1.0, true);
   s.warping_correction = section.boolean("warping_correction", true);
   s.kirchhoff_transverse_hourglass = section.word("transverse_hourglass", {"standard", "kirchhoff"}, "standard") == "kirchhoff";

@@ -150,7 +150,7 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
     for (int a = 0; a < 4; ++a) incidence_[static_cast<std::size_t>(fill[static_cast<std::size_t>(mesh.quads(a, e))]++)] = 4 * e + a;
 
   stress_ = Eigen::MatrixXd::Zero(element_->stress_size(), e_count);
-  hourglass_ = Eigen::Matrix<Real, 5, Eigen::Dynamic>::Zero(5, e_count);
+  hourglass_.setZero(shell::BelytschkoTsayShell::kHourglassSize, e_count);
   thickness_ = Eigen::VectorXd::Constant(e_count, mesh.thickness);
   element_power_ = element_hourglass_power_ = element_length_ = Eigen::VectorXd::Zero(e_count);
   element_force_ = element_moment_ = Eigen::Matrix<Real, 12, Eigen::Dynamic>::Zero(12, e_count);
@@ -669,7 +669,7 @@ std::vector<std::string> MpmAnalysis::warnings() const {
     out.push_back("mpm.level_ramp_steps = 0 with j2_plasticity: each load increment is applied at once and its dynamic "
                   "overshoot yields the material early; ramp it over a few thousand steps");
   const Real membrane = s.hourglass_membrane >= 0.0 ? s.hourglass_membrane : s.hourglass;
-  if (membrane >= 0.05)
+  if (s.hourglass_model == shell::HourglassModel::coefficients && membrane >= 0.05)
     out.push_back(fmt::format("shell hourglass coefficient {:g} on the membrane modes with j2_plasticity: the elastic "
                               "hourglass resistance stiffens plastic folds (crush forces too high, watch hourglass_ratio); "
                               "shell.hourglass_membrane: 0.01 to 0.03 is usual for crush",

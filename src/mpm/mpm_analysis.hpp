@@ -117,7 +117,7 @@ class MpmAnalysis : public Analysis {
 
   // elements
   Eigen::MatrixXd stress_;                         // 5 * points x E
-  Eigen::Matrix<Real, 5, Eigen::Dynamic> hourglass_;
+  Eigen::Matrix<Real, shell::BelytschkoTsayShell::kHourglassSize, Eigen::Dynamic> hourglass_;
   Eigen::VectorXd thickness_, element_power_, element_hourglass_power_, element_length_;
   Eigen::Matrix<Real, 12, Eigen::Dynamic> element_force_, element_moment_;
 

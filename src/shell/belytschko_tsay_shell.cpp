@@ -80,8 +80,11 @@ Real BelytschkoTsayShell::stable_time_step(const NodeMatrix& x) const {
 }
 
 Real BelytschkoTsayShell::stable_time_step(Real characteristic_length) const {
-  // hourglass springs add about r of the membrane stiffness
-  const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : section_.hourglass;
+  // coefficient springs add about r of the membrane stiffness; the physical hourglass stiffness
+  // stays below the constant-strain modes' (largest eigenvalue of the element unchanged), so no factor
+  Real r_mem = 0.0;
+  if (section_.hourglass_model == HourglassModel::coefficients)
+    r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : section_.hourglass;
   const Real c = material_.plate_wave_speed() * std::sqrt(1.0 + r_mem);
   return characteristic_length / c;
 }
@@ -187,55 +190,27 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   ml.row(1) = area * (b1 * mxx + b2 * mxy + Row4::Constant(0.25 * qxz));
   ml.row(2).setZero();
 
-  // hourglass resistance (eqs (30)-(36))
-  const Real r = section_.hourglass;
-  const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
-  const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : r;
-  const Real r_w = section_.hourglass_transverse >= 0.0 ? section_.hourglass_transverse : r;
-  if (r_bend > 0.0 || r_mem > 0.0 || r_w > 0.0) {
-    Row4 hv;
-    hv << 1.0, -1.0, 1.0, -1.0;
-    const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
-    const Real bsq = b1.squaredNorm() + b2.squaredNorm();
-    const Real E = material_.young_modulus(), G = material_.shear_modulus();
-    const Real c_bend = r_bend * E * h * h * h * area / 192.0 * bsq;
-    const Real c_w = r_w * k * G * h * h * h / 12.0 * bsq;
-    const Real c_mem = r_mem * E * h * area / 8.0 * bsq;
-    // transverse mode: q_w = gamma . v_z + cx . theta_x + cy . theta_y (cx = cy = 0 in the standard form)
-    Row4 cx = Row4::Zero(), cy = Row4::Zero();
-    if (section_.kirchhoff_transverse_hourglass) {
-      // -1/2 of the rotation part of sum_e s_e L_e gamma_e over the edges e = (I, J), s_e = +1, -1, +1, -1,
-      // less its value for a constant rotation (removed with the mean rotation, as gamma removes linear w)
-      const Real sign[4] = {1.0, -1.0, 1.0, -1.0};
-      for (int e = 0; e < 4; ++e) {
-        const int i = e, j = (e + 1) % 4;
-        const Real dxe = xh(j) - xh(i), dye = yh(j) - yh(i);
-        cy(i) -= 0.25 * sign[e] * dxe;
-        cy(j) -= 0.25 * sign[e] * dxe;
-        cx(i) += 0.25 * sign[e] * dye;
-        cx(j) += 0.25 * sign[e] * dye;
-      }
-      cy.array() -= 0.25 * hv.dot(xh);
-      cx.array() += 0.25 * hv.dot(yh);
-    }
-    const Real rates[kHourglassSize] = {gamma.dot(tx), gamma.dot(ty), gamma.dot(vz) + cx.dot(tx) + cy.dot(ty),
-                                        gamma.dot(vx), gamma.dot(vy)};
-    const Real stiff[kHourglassSize] = {c_bend, c_bend, c_w, c_mem, c_mem};
-    Real hg_power = 0.0;
-    for (int i = 0; i < kHourglassSize; ++i) {
-      const Real old = hourglass[i];
-      hourglass[i] += dt * stiff[i] * rates[i];
-      hg_power += 0.5 * (old + hourglass[i]) * rates[i];
-    }
-    out.hourglass_power = hg_power;
-    ml.row(0) += gamma * hourglass[0];
-    ml.row(1) += gamma * hourglass[1];
-    fl.row(2) += gamma * hourglass[2];
-    ml.row(0) += cx * hourglass[2];
-    ml.row(1) += cy * hourglass[2];
-    fl.row(0) += gamma * hourglass[3];
-    fl.row(1) += gamma * hourglass[4];
+  // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
+  const Row4 tz = wl.row(2);
+  const HourglassRates hg = section_.hourglass_model == HourglassModel::physical
+                                ? physical_hourglass(xh, yh, b1, b2, h, area)
+                                : coefficient_hourglass(xh, yh, b1, b2, h, area);
+  Real hg_power = 0.0;
+  for (int i = 0; i < kHourglassSize; ++i) {
+    const Real rate = hg.vx[i].dot(vx) + hg.vy[i].dot(vy) + hg.vz[i].dot(vz) + hg.tx[i].dot(tx) + hg.ty[i].dot(ty) +
+                      hg.tz[i].dot(tz);
+    if (hg.stiffness[i] == 0.0) continue;
+    const Real old = hourglass[i];
+    hourglass[i] += dt * hg.stiffness[i] * rate;
+    hg_power += 0.5 * (old + hourglass[i]) * rate;
+    fl.row(0) += hg.vx[i] * hourglass[i];
+    fl.row(1) += hg.vy[i] * hourglass[i];
+    fl.row(2) += hg.vz[i] * hourglass[i];
+    ml.row(0) += hg.tx[i] * hourglass[i];
+    ml.row(1) += hg.ty[i] * hourglass[i];
+    ml.row(2) += hg.tz[i] * hourglass[i];
   }
+  out.hourglass_power = hg_power;
 
   // transpose of the warping projection: in-plane forces at warped nodes feed the transverse forces
   if (warped) {
@@ -249,6 +224,103 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // back to the global frame (eq (37))
   out.force = R.transpose() * fl;
   out.moment = R.transpose() * ml;
+  return out;
+}
+
+BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(const Row4& xh, const Row4& yh,
+                                                                               const Row4& b1, const Row4& b2, Real h,
+                                                                               Real area) const {
+  // Belytschko-Tsay 1983 springs with the Flanagan-Belytschko gamma vectors (seed eqs (30)-(36))
+  HourglassRates out;
+  const Real r = section_.hourglass;
+  const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
+  const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : r;
+  const Real r_w = section_.hourglass_transverse >= 0.0 ? section_.hourglass_transverse : r;
+  Row4 hv;
+  hv << 1.0, -1.0, 1.0, -1.0;
+  const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
+  const Real bsq = b1.squaredNorm() + b2.squaredNorm();
+  const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
+  const Real c_bend = r_bend * E * h * h * h * area / 192.0 * bsq;
+  const Real c_w = r_w * k * G * h * h * h / 12.0 * bsq;
+  const Real c_mem = r_mem * E * h * area / 8.0 * bsq;
+  // transverse mode: q_w = gamma . v_z + cx . theta_x + cy . theta_y (cx = cy = 0 in the standard form)
+  Row4 cx = Row4::Zero(), cy = Row4::Zero();
+  if (section_.kirchhoff_transverse_hourglass) {
+    // -1/2 of the rotation part of sum_e s_e L_e gamma_e over the edges e = (I, J), s_e = +1, -1, +1, -1,
+    // less its value for a constant rotation (removed with the mean rotation, as gamma removes linear w)
+    const Real sign[4] = {1.0, -1.0, 1.0, -1.0};
+    for (int e = 0; e < 4; ++e) {
+      const int i = e, j = (e + 1) % 4;
+      const Real dxe = xh(j) - xh(i), dye = yh(j) - yh(i);
+      cy(i) -= 0.25 * sign[e] * dxe;
+      cy(j) -= 0.25 * sign[e] * dxe;
+      cx(i) += 0.25 * sign[e] * dye;
+      cx(j) += 0.25 * sign[e] * dye;
+    }
+    cy.array() -= 0.25 * hv.dot(xh);
+    cx.array() += 0.25 * hv.dot(yh);
+  }
+  out.tx[0] = gamma;
+  out.ty[1] = gamma;
+  out.vz[2] = gamma;
+  out.tx[2] = cx;
+  out.ty[2] = cy;
+  out.vx[3] = gamma;
+  out.vy[4] = gamma;
+  out.stiffness = {c_bend, c_bend, c_w, c_mem, c_mem, 0.0, 0.0};
+  return out;
+}
+
+BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh,
+                                                                            const Row4& b1, const Row4& b2, Real h,
+                                                                            Real area) const {
+  HourglassRates out;
+  Row4 hv;
+  hv << 1.0, -1.0, 1.0, -1.0;
+  const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;  // gamma . u = 4 q for u = q xi eta
+  const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
+  // membrane and bending: energy of the bilinear mode's normal strain alone (the parasitic shear of
+  // the bilinear field left out, so pure in-plane / out-of-plane bending is exact on rectangles):
+  // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
+  const Real bx = b1.squaredNorm(), by = b2.squaredNorm();
+  out.tx[0] = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
+  out.ty[1] = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
+  out.vx[3] = gamma;
+  out.vy[4] = gamma;
+  const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
+  // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin) edge-tied shears. Covariant shear at
+  // the midpoint of edge (I, J): g = [(w_J - w_I) + dx theta_y_avg - dy theta_x_avg] / 2; gamma_xi varies
+  // linearly in eta between edges 0-1 and 3-2, gamma_eta in xi between 0-3 and 1-2. Their differences
+  // D_xi, D_eta carry (1/2) k G t (A / 3) |J^-T e|^2 D^2 of energy (zero for rigid motions and for the
+  // Kirchhoff twist w = c x y; MITC4's shear energy exactly on parallelograms with the centre term below).
+  auto add_edge = [&](int slot, int i, int j, Real s) {
+    const Real dxe = xh(j) - xh(i), dye = yh(j) - yh(i);
+    out.vz[slot](j) += 0.5 * s;
+    out.vz[slot](i) -= 0.5 * s;
+    out.ty[slot](i) += 0.25 * s * dxe;
+    out.ty[slot](j) += 0.25 * s * dxe;
+    out.tx[slot](i) -= 0.25 * s * dye;
+    out.tx[slot](j) -= 0.25 * s * dye;
+  };
+  add_edge(2, 3, 2, 0.5);
+  add_edge(2, 0, 1, -0.5);
+  add_edge(5, 1, 2, 0.5);
+  add_edge(5, 0, 3, -0.5);
+  Row4 xi, eta;
+  xi << -1.0, 1.0, 1.0, -1.0;
+  eta << -1.0, -1.0, 1.0, 1.0;
+  Eigen::Matrix<Real, 2, 2> jac;
+  jac << 0.25 * xi.dot(xh), 0.25 * xi.dot(yh), 0.25 * eta.dot(xh), 0.25 * eta.dot(yh);
+  const Eigen::Matrix<Real, 2, 2> jinv = jac.inverse();
+  const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
+  const Real shear = k * G * h * area / 3.0;
+  // drilling: theta_z (mean) - omega_z, omega_z = (b1 . v_y - b2 . v_x) / 2
+  out.tz[6] = Row4::Constant(0.25);
+  out.vy[6] = -0.5 * b1;
+  out.vx[6] = 0.5 * b2;
+  out.stiffness = {bend * by, bend * bx, shear * c_xi, mem * bx, mem * by, shear * c_eta,
+                   section_.drilling * G * h * area};
   return out;
 }
 

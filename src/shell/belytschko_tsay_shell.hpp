@@ -8,12 +8,13 @@
 //   2d_xz = B1.vz + N.ty,   2d_yz = B2.vz - N.tx      (N_I = 1/4, B = dN/dx at the centre)
 // Resultants (eq (28)) over the Lobatto points (eq (29)); nodal forces and moments (eqs (25)-(26)) are
 // the power conjugates of the rates; hourglass resistance (eqs (30)-(36), Belytschko-Tsay 1983 with the
-// Flanagan-Belytschko gamma vectors; the rotational modes may take their own coefficient,
-// ShellSection::hourglass_bending, whose value 1 is the physical stiffness); global forces f = Q^T f_hat (eq (37)).
+// Flanagan-Belytschko gamma vectors) in the coefficient model, or the physical stabilisation of
+// ShellSection (the default); global forces f = Q^T f_hat (eq (37)).
 // Warping correction: a Belytschko-Wong-Chiang-type rigid-body projection (the in-plane velocities
 // of warped nodes lose the part produced by the element's rigid rotation about its in-plane axes,
 // and the transposed projection is applied to the forces), so a warped element under rigid rotation
 // gives zero strain rates and no hourglass forces, and its forces are in moment equilibrium.
+#include <array>
 #include <vector>
 
 #include "core/types.hpp"
@@ -30,10 +31,25 @@ struct ThroughThicknessRule {
   static ThroughThicknessRule lobatto(int n);
 };
 
+/// How the element resists its hourglass modes.
+///  - physical (default): stiffnesses from the material and the element's geometry, no coefficient:
+///    membrane and bending modes take the bending-exact (ASQBI-type, Belytschko-Bindeman 1993;
+///    Belytschko-Leviathan 1994) stiffness E t A |b_i|^2 / 12 and E t^3 A |b_i|^2 / 144, the transverse
+///    shear takes the hourglass part of the MITC4 edge-tied shears (two modes, k G t A / 3 each: the
+///    element is then MITC4's transverse shear exactly on parallelograms), and a Hughes-Brezzi drilling
+///    penalty ties the nodal drilling rotation to the in-plane rotation. Right on curved (faceted) shells.
+///  - coefficients: the Belytschko-Tsay 1983 springs r k_mode (seed eqs (30)-(36)) with the
+///    coefficients below (the seed's form; too flexible on curved shells, see docs/mpm.md).
+enum class HourglassModel { physical, coefficients };
+
 struct ShellSection {
   int thickness_points = 3;          // Lobatto points through the thickness
   Real shear_factor = 5.0 / 6.0;     // transverse shear correction k
-  Real hourglass = 0.1;              // hourglass coefficient r (membrane, bending and transverse)
+  HourglassModel hourglass_model = HourglassModel::physical;
+  /// Drilling penalty (physical model): energy 1/2 drilling G t A (theta_z - omega_z)^2 at the centre,
+  /// omega_z = (dv/dx - du/dy) / 2 (Hughes-Brezzi 1989); 0 = free drilling rotations.
+  Real drilling = 0.01;
+  Real hourglass = 0.1;              // coefficient model: hourglass coefficient r (membrane, bending, transverse)
   /// Coefficient of the two rotational (bending) hourglass modes; negative = use `hourglass`.
   /// About 1 is the physical value: on a square element the mode theta_y = c h_I (h = [1,-1,1,-1])
   /// stores r (1 - nu^2) D c^2 with the stiffness r E h^3 A Bsq / 192, and the exactly integrated
@@ -79,7 +95,9 @@ class BelytschkoTsayShell {
   int point_stride() const { return kStressComponents + material_.state_size(); }
   /// Doubles of stress state per element (point_stride() per through-thickness point).
   int stress_size() const { return point_stride() * thickness_points(); }
-  static constexpr int kHourglassSize = 5;  // bending x, bending y, transverse w, membrane x, membrane y
+  /// Hourglass (stabilisation) resultants per element: bending x, bending y, transverse w (coefficient
+  /// model) or transverse xi (physical), membrane x, membrane y, transverse eta, drilling (physical).
+  static constexpr int kHourglassSize = 7;
 
   /// Advance the element by one step: rates from the node velocities v and angular velocities
   /// omega at the configuration x (global frame), stress update over dt, internal forces.
@@ -100,6 +118,22 @@ class BelytschkoTsayShell {
   Real stable_time_step(Real characteristic_length) const;
 
  private:
+  using Row4 = Eigen::Matrix<Real, 1, 4>;
+  /// Hourglass generalised strain rates q_i = vx[i].v_x + ... + tz[i].theta_z (local frame) and the
+  /// stiffness of each (Q_i += dt stiffness_i q_i; the forces are the conjugates Q_i * the rows).
+  struct HourglassRates {
+    std::array<Row4, kHourglassSize> vx, vy, vz, tx, ty, tz;
+    std::array<Real, kHourglassSize> stiffness{};
+    HourglassRates() {
+      for (auto* rows : {&vx, &vy, &vz, &tx, &ty, &tz})
+        for (auto& r : *rows) r.setZero();
+    }
+  };
+  HourglassRates coefficient_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
+                                       Real area) const;
+  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
+                                    Real area) const;
+
   ShellSection section_;
   const ShellMaterial& material_;
   ThroughThicknessRule rule_;

@@ -98,21 +98,6 @@ TEST(mpm_Cases, UnstableRunStopsWithExitThree) {
   EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
 }
 
-TEST(mpm_Cases, BendingHourglassCoefficientIsReadAndRangeChecked) {
-  // the cantilever stores no hourglass energy, so the physical bending coefficient leaves it unchanged
-  const Outcome ok = run_case("hg_bending", kStrip, "--set shell.hourglass_bending=1.0");
-  ASSERT_EQ(ok.exit_code, 0) << ok.output;
-  std::ifstream summary(fs::temp_directory_path() / "lamina_mpm_test_hg_bending" / "out" / "summary.json");
-  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
-  const auto at = text.find("\"w_tip\":");
-  ASSERT_NE(at, std::string::npos);
-  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
-  EXPECT_NEAR(std::stod(text.substr(at + 8)), exact, 0.01 * exact);
-  const Outcome bad = run_case("hg_bending_bad", kStrip, "--set shell.hourglass_bending=3.0");
-  EXPECT_EQ(bad.exit_code, 2) << bad.output;
-  EXPECT_NE(bad.output.find("shell.hourglass_bending"), std::string::npos) << bad.output;
-}
-
 double summary_value(const std::string& name, const std::string& key) {
   std::ifstream summary(fs::temp_directory_path() / ("lamina_mpm_test_" + name) / "out" / "summary.json");
   const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
@@ -120,6 +105,38 @@ double summary_value(const std::string& name, const std::string& key) {
   if (at == std::string::npos) return std::nan("");
   return std::stod(text.substr(at + key.size() + 3));
 }
+
+TEST(mpm_Cases, BendingHourglassCoefficientIsReadAndRangeChecked) {
+  // the cantilever stores no hourglass energy, so the physical bending coefficient leaves it unchanged
+  const Outcome ok = run_case("hg_bending", kStrip, "--set shell.hourglass=0.1 --set shell.hourglass_bending=1.0");
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  std::ifstream summary(fs::temp_directory_path() / "lamina_mpm_test_hg_bending" / "out" / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"w_tip\":");
+  ASSERT_NE(at, std::string::npos);
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  EXPECT_NEAR(std::stod(text.substr(at + 8)), exact, 0.01 * exact);
+  const Outcome bad = run_case("hg_bending_bad", kStrip, "--set shell.hourglass=0.1 --set shell.hourglass_bending=3.0");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("shell.hourglass_bending"), std::string::npos) << bad.output;
+  // a per-mode coefficient without a coefficient model (the default is physical) is refused, not ignored
+  const Outcome orphan = run_case("hg_bending_physical", kStrip, "--set shell.hourglass_bending=1.0");
+  EXPECT_EQ(orphan.exit_code, 2) << orphan.output;
+  EXPECT_NE(orphan.output.find("shell.hourglass_bending"), std::string::npos) << orphan.output;
+  EXPECT_NE(orphan.output.find("physical"), std::string::npos) << orphan.output;
+  const Outcome word = run_case("hg_word", kStrip, "--set shell.hourglass=viscous");
+  EXPECT_EQ(word.exit_code, 2) << word.output;
+  EXPECT_NE(word.output.find("physical"), std::string::npos) << word.output;
+}
+
+TEST(mpm_Cases, PhysicalHourglassIsTheDefaultAndMatchesTheCantilever) {
+  // the physical stabilisation needs no coefficient: the cantilever tip within 1 % of beam theory
+  const Outcome o = run_case("hg_physical", kStrip, "--set shell.hourglass=physical");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  EXPECT_NEAR(summary_value("hg_physical", "w_tip"), exact, 0.01 * exact);
+}
+
 
 TEST(mpm_Cases, InitialVelocityIsAnEnergyInput) {
   // the strip thrown sideways (all free nodes at 0.05 in z) vibrates about its clamped end: the energy
@@ -157,10 +174,12 @@ loads:
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
   EXPECT_NE(plain.output.find("warning: shell.thickness_points = 3"), std::string::npos) << plain.output;
   EXPECT_NE(plain.output.find("warning: mpm.level_ramp_steps = 0"), std::string::npos) << plain.output;
-  EXPECT_NE(plain.output.find("shell.hourglass_membrane"), std::string::npos) << plain.output;
+  EXPECT_EQ(plain.output.find("shell.hourglass_membrane"), std::string::npos) << plain.output;  // physical: no advice
+  const Outcome springs = run_case("plastic_warnings_springs", yaml, "--set shell.hourglass=0.1", true);
+  ASSERT_EQ(springs.exit_code, 0) << springs.output;
+  EXPECT_NE(springs.output.find("shell.hourglass_membrane"), std::string::npos) << springs.output;
   const Outcome advised = run_case("plastic_warnings_advised", yaml,
-                                   "--set shell.thickness_points=7 --set shell.hourglass_membrane=0.02 --set mpm.level_ramp_steps=2000",
-                                   true);
+                                   "--set shell.thickness_points=7 --set mpm.level_ramp_steps=2000", true);
   ASSERT_EQ(advised.exit_code, 0) << advised.output;
   EXPECT_EQ(advised.output.find("warning"), std::string::npos) << advised.output;
 }

@@ -32,7 +32,7 @@ struct Fixture {
 ShellElementResult update_once(const Fixture& f, const NodeMatrix& x, const NodeMatrix& v, const NodeMatrix& w, Real dt) {
   BelytschkoTsayShell shell(f.section, f.material);
   std::vector<Real> stress(shell.stress_size(), 0.0);
-  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
   Real h = f.h;
   return shell.update(x, v, w, dt, stress.data(), hourglass, h);
 }
@@ -52,8 +52,10 @@ TEST(shell_BelytschkoTsay, LobattoRulesIntegratePolynomialsExactly) {
 
 TEST(shell_BelytschkoTsay, RigidBodyMotionGivesNoForce) {
   Fixture f;
+  for (HourglassModel model : {HourglassModel::physical, HourglassModel::coefficients})
   for (bool kirchhoff : {false, true})
   for (Real warp : {0.0, 0.05}) {
+    f.section.hourglass_model = model;
     f.section.kirchhoff_transverse_hourglass = kirchhoff;
     BelytschkoTsayShell shell(f.section, f.material);
     const NodeMatrix x = element(some_rotation(), 2.0, 1.0, 0.3, warp);
@@ -64,7 +66,7 @@ TEST(shell_BelytschkoTsay, RigidBodyMotionGivesNoForce) {
       omega.col(a) = w;
     }
     std::vector<Real> stress(shell.stress_size(), 0.0);
-    Real hourglass[5] = {0, 0, 0, 0, 0};
+    Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
     Real h = f.h;
     const auto r = shell.update(x, v, omega, 1e-3, stress.data(), hourglass, h);
     ASSERT_TRUE(r.valid);
@@ -91,7 +93,7 @@ TEST(shell_BelytschkoTsay, MembranePatchGivesAnalyticResultantsAndNodalForces) {
   NodeMatrix v;
   for (int a2 = 0; a2 < 4; ++a2) v.col(a2) = R * (D * (R.transpose() * (x.col(a2) - centre)));
   std::vector<Real> stress(shell.stress_size(), 0.0);
-  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
   Real h = f.h;
   const auto r = shell.update(x, v, NodeMatrix::Zero(), dt, stress.data(), hourglass, h);
   ASSERT_TRUE(r.valid);
@@ -133,7 +135,7 @@ TEST(shell_BelytschkoTsay, BendingPatchGivesAnalyticMomentsAndNodalMoments) {
     omega.col(k) = R * Vec3(-ky * p.y(), kx * p.x(), 0);
   }
   std::vector<Real> stress(shell.stress_size(), 0.0);
-  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
   Real h = f.h;
   const auto r = shell.update(x, v, omega, dt, stress.data(), hourglass, h);
   ASSERT_TRUE(r.valid);
@@ -159,13 +161,14 @@ TEST(shell_BelytschkoTsay, BendingPatchGivesAnalyticMomentsAndNodalMoments) {
 
 TEST(shell_BelytschkoTsay, HourglassModeIsResistedAndItsEnergyReported) {
   Fixture f;
+  f.section.hourglass_model = HourglassModel::coefficients;  // the seed's springs
   f.section.hourglass = 0.1;
   BelytschkoTsayShell shell(f.section, f.material);
   const NodeMatrix x = element(Mat3::Identity(), 1.0, 1.0);
   NodeMatrix v = NodeMatrix::Zero();
   v.row(2) << 1e-3, -1e-3, 1e-3, -1e-3;  // transverse hourglass (twist) pattern
   std::vector<Real> stress(shell.stress_size(), 0.0);
-  Real hourglass[5] = {0, 0, 0, 0, 0};
+  Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
   Real h = f.h;
   const auto r = shell.update(x, v, NodeMatrix::Zero(), 1.0, stress.data(), hourglass, h);
   EXPECT_GT(r.force.row(2).dot(v.row(2)), 0.0);          // resisting
@@ -173,7 +176,7 @@ TEST(shell_BelytschkoTsay, HourglassModeIsResistedAndItsEnergyReported) {
   EXPECT_NEAR(r.internal_power, 0.0, 1e-20);             // one-point rule does not see it
   f.section.hourglass = 0.0;
   BelytschkoTsayShell free_shell(f.section, f.material);
-  Real hg2[5] = {0, 0, 0, 0, 0};
+  Real hg2[BelytschkoTsayShell::kHourglassSize] = {};
   std::fill(stress.begin(), stress.end(), 0.0);
   const auto r0 = free_shell.update(x, v, NodeMatrix::Zero(), 1.0, stress.data(), hg2, h);
   EXPECT_LT(r0.force.cwiseAbs().maxCoeff(), 1e-15);
@@ -185,6 +188,7 @@ TEST(shell_BelytschkoTsay, HourglassModeIsResistedAndItsEnergyReported) {
 /// It leaves the transverse and membrane hourglass modes to `hourglass`; unset, it is `hourglass`.
 TEST(shell_BelytschkoTsay, PhysicalBendingHourglassMatchesIntegratedBendingEnergy) {
   Fixture f;
+  f.section.hourglass_model = HourglassModel::coefficients;  // the seed's springs
   const Real a = 0.5;  // half side
   const NodeMatrix x = element(some_rotation(), 2 * a, 2 * a);
   const Mat3 R = some_rotation();
@@ -219,11 +223,13 @@ TEST(shell_BelytschkoTsay, PhysicalBendingHourglassMatchesIntegratedBendingEnerg
 TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
   Fixture f;
   f.section.hourglass = 0.1;
+  for (HourglassModel model : {HourglassModel::physical, HourglassModel::coefficients})
   for (bool kirchhoff : {false, true})
   for (Real r_mem : {-1.0, 0.33})  // also with the physical membrane hourglass stiffness
   for (Real r_bend : {-1.0, 1.0})  // also with the physical rotational hourglass stiffness
   for (Real nu : {0.3, 0.0})
   for (Real aspect : {1.0, 3.0, 0.75}) {
+    f.section.hourglass_model = model;
     f.section.kirchhoff_transverse_hourglass = kirchhoff;
     f.section.hourglass_membrane = r_mem;
     f.section.hourglass_bending = r_bend;
@@ -236,7 +242,7 @@ TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
       if (j < 12) v(j % 3, j / 3) = 1.0;
       else w((j - 12) % 3, (j - 12) / 3) = 1.0;
       std::vector<Real> stress(shell.stress_size(), 0.0);
-      Real hourglass[5] = {0, 0, 0, 0, 0};
+      Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
       Real h = f.h;
       const auto r = shell.update(x, v, w, 1.0, stress.data(), hourglass, h);
       Eigen::Matrix<Real, 24, 1> column;
@@ -253,7 +259,8 @@ TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
     const Real omega_max = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Real, 24, 24>>(A).eigenvalues().maxCoeff());
     const Real critical = 2.0 / omega_max;
     const Real estimate = shell.stable_time_step(x);
-    EXPECT_LE(estimate, critical) << "aspect " << aspect << " nu " << nu << " r_bend " << r_bend << " r_mem " << r_mem;
+    EXPECT_LE(estimate, critical) << "aspect " << aspect << " nu " << nu << " r_bend " << r_bend << " r_mem " << r_mem
+                                  << " physical " << (model == HourglassModel::physical);
     EXPECT_GE(estimate, 0.3 * critical) << "aspect " << aspect << " nu " << nu << " r_bend " << r_bend;  // not uselessly small
   }
 }
@@ -264,6 +271,7 @@ TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
 /// spring resists the twist; the spurious w mode (w = c h_I, no rotation) is resisted by both.
 TEST(shell_BelytschkoTsay, KirchhoffTransverseHourglassLeavesTwistFree) {
   Fixture f;
+  f.section.hourglass_model = HourglassModel::coefficients;  // the seed's springs
   f.section.hourglass = 0.0;
   f.section.hourglass_transverse = 0.1;
   const Mat3 R = some_rotation();
@@ -306,6 +314,7 @@ TEST(shell_BelytschkoTsay, KirchhoffTransverseHourglassLeavesTwistFree) {
 /// hourglass_membrane / hourglass_transverse replace `hourglass` for their own modes only.
 TEST(shell_BelytschkoTsay, PerModeHourglassCoefficients) {
   Fixture f;
+  f.section.hourglass_model = HourglassModel::coefficients;  // the seed's springs
   const NodeMatrix x = element(some_rotation(), 2.0, 1.0, 0.2);
   const Mat3 R = some_rotation();
   NodeMatrix vx = NodeMatrix::Zero(), vz = NodeMatrix::Zero();
@@ -325,6 +334,48 @@ TEST(shell_BelytschkoTsay, PerModeHourglassCoefficients) {
   EXPECT_NEAR(energy(0.1, -1.0, 0.5, vz), 5.0 * energy(0.1, -1.0, -1.0, vz), 1e-9 * energy(0.1, -1.0, -1.0, vz));
   EXPECT_DOUBLE_EQ(energy(0.1, -1.0, 0.5, vx), energy(0.1, -1.0, -1.0, vx));
   EXPECT_EQ(energy(0.0, -1.0, -1.0, vx), 0.0);
+}
+
+/// Physical stabilisation (the default): each mode's stored energy is the closed form of its source.
+/// Membrane u_x = q xi eta on a 2a x 2b rectangle: the bending-exact (1/2)(4/3) E t (b/a) q^2; rotation
+/// theta_y = q xi eta: (1/2)(4/3)(E t^3 / 12)(b/a) q^2; the spurious w mode w = s h_I: MITC4's transverse
+/// shear energy (1/2)(k G t A / 3)(s^2 / a^2 + s^2 / b^2); the Kirchhoff twist w = c x y stores nothing;
+/// a drilling rotation theta_z alone: (1/2) drilling G t A theta_z^2.
+TEST(shell_BelytschkoTsay, PhysicalStabilisationStoresTheClosedFormEnergies) {
+  Fixture f;
+  const Real a = 1.0, b = 0.5, q = 1e-4, t = f.h, E = 2.0e5, nu = 0.3, G = E / (2 * (1 + nu)), k = 5.0 / 6.0;
+  const Real A = 4 * a * b;
+  const Mat3 R = some_rotation();
+  const NodeMatrix x = element(R, 2 * a, 2 * b);
+  const Real hpat[4] = {1, -1, 1, -1};
+  auto energy = [&](auto field) {  // field(node, local x, local y) -> {u_local, theta_local}
+    const NodeMatrix xl = R.transpose() * (x.colwise() - x.rowwise().mean());
+    NodeMatrix v, w;
+    for (int n = 0; n < 4; ++n) {
+      const auto [u, th] = field(n, xl(0, n), xl(1, n));
+      v.col(n) = R * u;
+      w.col(n) = R * th;
+    }
+    const auto r = update_once(f, x, v, w, 1.0);
+    EXPECT_NEAR(r.force.rowwise().sum().norm(), 0.0, 1e-12 * E * t);  // self-equilibrated
+    return r.hourglass_power;  // dt = 1: the energy of the displacement v
+  };
+  using Pair = std::pair<Vec3, Vec3>;
+  EXPECT_NEAR(energy([&](int n, Real, Real) { return Pair(Vec3(q * hpat[n], 0, 0), Vec3::Zero()); }),
+              0.5 * 4.0 / 3.0 * E * t * (b / a) * q * q, 1e-10 * E * t * q * q);
+  EXPECT_NEAR(energy([&](int n, Real, Real) { return Pair(Vec3(0, q * hpat[n], 0), Vec3::Zero()); }),
+              0.5 * 4.0 / 3.0 * E * t * (a / b) * q * q, 1e-10 * E * t * q * q);
+  EXPECT_NEAR(energy([&](int n, Real, Real) { return Pair(Vec3::Zero(), Vec3(0, q * hpat[n], 0)); }),
+              0.5 * 4.0 / 3.0 * E * t * t * t / 12 * (b / a) * q * q, 1e-10 * E * t * t * t * q * q);
+  EXPECT_NEAR(energy([&](int n, Real, Real) { return Pair(Vec3(0, 0, q * hpat[n]), Vec3::Zero()); }),
+              0.5 * k * G * t * A / 3 * (q * q / (a * a) + q * q / (b * b)), 1e-10 * G * t * q * q);
+  EXPECT_NEAR(energy([&](int, Real xx, Real yy) { return Pair(Vec3(0, 0, q * xx * yy), Vec3(q * xx, -q * yy, 0)); }), 0.0,
+              1e-14 * G * t * q * q);
+  EXPECT_NEAR(energy([&](int, Real, Real) { return Pair(Vec3::Zero(), Vec3(0, 0, q)); }), 0.5 * 0.01 * G * t * A * q * q,
+              1e-10 * G * t * A * q * q);
+  // an in-plane rigid rotation with the matching drilling rotation stores nothing
+  EXPECT_NEAR(energy([&](int, Real xx, Real yy) { return Pair(Vec3(-q * yy, q * xx, 0), Vec3(0, 0, q)); }), 0.0,
+              1e-14 * G * t * q * q);
 }
 
 }  // namespace
