@@ -159,6 +159,12 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   const int nq = thickness_points(), stride = point_stride();  // (one virtual call per element)
   Real nxx = 0, nyy = 0, nxy = 0, mxx = 0, myy = 0, mxy = 0, qxz = 0, qyz = 0;
   Real power = 0.0, dzz_mean = 0.0;
+  // plastic materials: how much of an elastic stress increment the material took at each point
+  // (|d sigma| / |d sigma_trial|), averaged over the section for the membrane and z^2-weighted for bending
+  const bool plastic = material_.is_plastic();
+  const Real E = material_.young_modulus(), nu = material_.poisson_ratio(), Gm = material_.shear_modulus();
+  const Real Ep = E / (1.0 - nu * nu);
+  Real tangent_membrane = 0.0, tangent_bending = 0.0, weight_membrane = 0.0, weight_bending = 0.0;
   const Real k = section_.shear_factor;
   for (int q = 0; q < nq; ++q) {
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * h;
@@ -168,6 +174,16 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     Real old[kStressComponents];
     std::copy(s, s + kStressComponents, old);
     dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * material_.update(s, rate, dt);
+    if (plastic) {
+      const Real t0 = Ep * (rate[0] + nu * rate[1]) * dt, t1 = Ep * (rate[1] + nu * rate[0]) * dt, t2 = Gm * rate[2] * dt;
+      const Real trial = t0 * t0 + t1 * t1 + 2.0 * t2 * t2;
+      const Real d0 = s[0] - old[0], d1 = s[1] - old[1], d2 = s[2] - old[2];
+      const Real ratio = trial > 0.0 ? std::min(1.0, std::sqrt((d0 * d0 + d1 * d1 + 2.0 * d2 * d2) / trial)) : 1.0;
+      tangent_membrane += w * ratio;
+      weight_membrane += w;
+      tangent_bending += w * z * z * ratio;
+      weight_bending += w * z * z;
+    }
     power += w * (0.5 * (old[0] + s[0]) * rate[0] + 0.5 * (old[1] + s[1]) * rate[1] + 0.5 * (old[2] + s[2]) * rate[2] +
                   k * 0.5 * (old[3] + s[3]) * rate[3] + k * 0.5 * (old[4] + s[4]) * rate[4]);
     nxx += w * s[0];
@@ -193,7 +209,9 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
   const Row4 tz = wl.row(2);
   const HourglassRates hg = section_.hourglass_model == HourglassModel::physical
-                                ? physical_hourglass(xh, yh, b1, b2, h, area)
+                                ? physical_hourglass(xh, yh, b1, b2, h, area,
+                                                     weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
+                                                     weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
   Real hg_power = 0.0;
   for (int i = 0; i < kHourglassSize; ++i) {
@@ -201,7 +219,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
                       hg.tz[i].dot(tz);
     if (hg.stiffness[i] == 0.0) continue;
     const Real old = hourglass[i];
-    hourglass[i] += dt * hg.stiffness[i] * rate;
+    hourglass[i] = std::clamp(hourglass[i] + dt * hg.stiffness[i] * rate, -hg.limit[i], hg.limit[i]);
     hg_power += 0.5 * (old + hourglass[i]) * rate;
     fl.row(0) += hg.vx[i] * hourglass[i];
     fl.row(1) += hg.vy[i] * hourglass[i];
@@ -274,7 +292,8 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
 
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh,
                                                                             const Row4& b1, const Row4& b2, Real h,
-                                                                            Real area) const {
+                                                                            Real area, Real tangent_membrane,
+                                                                            Real tangent_bending) const {
   HourglassRates out;
   Row4 hv;
   hv << 1.0, -1.0, 1.0, -1.0;
@@ -319,8 +338,23 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   out.tz[6] = Row4::Constant(0.25);
   out.vy[6] = -0.5 * b1;
   out.vx[6] = 0.5 * b2;
-  out.stiffness = {bend * by, bend * bx, shear * c_xi, mem * bx, mem * by, shear * c_eta,
+  // scaled by the material's current tangent ratio (Belytschko-Bindeman: the stabilisation follows the
+  // material's response, so it does not stiffen a section that is flowing plastically)
+  const Real sm = tangent_membrane, sb = tangent_bending;
+  out.stiffness = {bend * by * sb, bend * bx * sb, shear * c_xi * sm, mem * bx * sm, mem * by * sm, shear * c_eta * sm,
                    section_.drilling * G * h * area};
+  // plastic materials: each mode's resultant is bounded where its peak stress (at the element's edge,
+  // the outer fibre) reaches the yield stress, so the stabilisation yields with the material instead of
+  // stiffening plastic folds: Q = (t A |b| / 6) sigma_peak (membrane), (t^2 A |b| / 36) sigma_peak
+  // (bending), (k t A / 3) |J^-T e| tau_peak with tau = sigma_y / sqrt(3) (transverse shear)
+  const Real sy = material_.stress_limit();
+  if (std::isfinite(sy)) {
+    const Real ax = std::sqrt(bx), ay = std::sqrt(by);
+    const Real ty_shear = sy / std::sqrt(3.0);
+    out.limit = {sy * h * h * area * ay / 36.0, sy * h * h * area * ax / 36.0,
+                 k * h * area / 3.0 * std::sqrt(c_xi) * ty_shear, sy * h * area * ax / 6.0, sy * h * area * ay / 6.0,
+                 k * h * area / 3.0 * std::sqrt(c_eta) * ty_shear, INFINITY};
+  }
   return out;
 }
 

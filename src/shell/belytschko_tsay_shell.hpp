@@ -124,15 +124,18 @@ class BelytschkoTsayShell {
   struct HourglassRates {
     std::array<Row4, kHourglassSize> vx, vy, vz, tx, ty, tz;
     std::array<Real, kHourglassSize> stiffness{};
+    std::array<Real, kHourglassSize> limit;  // |Q_i| bound (the mode's peak stress at the yield stress)
     HourglassRates() {
+      limit.fill(INFINITY);
       for (auto* rows : {&vx, &vy, &vz, &tx, &ty, &tz})
         for (auto& r : *rows) r.setZero();
     }
   };
   HourglassRates coefficient_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
                                        Real area) const;
+  /// tangent_membrane / tangent_bending: the material's current stiffness ratio (1 = elastic).
   HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
-                                    Real area) const;
+                                    Real area, Real tangent_membrane, Real tangent_bending) const;
 
   ShellSection section_;
   const ShellMaterial& material_;

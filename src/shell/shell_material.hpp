@@ -1,6 +1,7 @@
 #pragma once
 // Plane-stress constitutive update at one through-thickness point of a shell, in the element's
 // corotational frame (seed 000 eqs (27)-(29): stresses updated by plain increments of the local rates).
+#include <cmath>
 #include <memory>
 
 #include "core/types.hpp"
@@ -24,6 +25,9 @@ class ShellMaterial {
   /// Equivalent plastic strain stored in one point's values (sigma + history); 0 for elastic models.
   virtual Real plastic_strain(const Real* /*point*/) const { return 0.0; }
   virtual bool is_plastic() const { return false; }
+  /// Largest stress the material carries (initial yield for J2; infinity for elastic models): bounds
+  /// the physical hourglass stresses of BelytschkoTsayShell so that they yield with the material.
+  virtual Real stress_limit() const { return INFINITY; }
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
   virtual Real density() const = 0;
@@ -82,6 +86,7 @@ class J2PlasticShellMaterial final : public ShellMaterial {
   int state_size() const override { return 1; }
   Real plastic_strain(const Real* point) const override { return point[kStressComponents]; }
   bool is_plastic() const override { return true; }
+  Real stress_limit() const override { return yield_; }
   Real young_modulus() const override { return young_; }
   Real poisson_ratio() const override { return poisson_; }
   Real density() const override { return density_; }

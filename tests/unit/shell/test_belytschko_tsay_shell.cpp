@@ -378,5 +378,45 @@ TEST(shell_BelytschkoTsay, PhysicalStabilisationStoresTheClosedFormEnergies) {
               1e-14 * G * t * q * q);
 }
 
+/// With a plastic material the physical stabilisation yields with it: the membrane hourglass resultant of
+/// u_x = q xi eta is bounded where the mode's peak stress reaches the yield stress, Q <= sigma_y t A |b_x| / 6,
+/// and in an element that is flowing plastically (uniaxial stretch beyond yield) the hourglass stiffness
+/// falls with the material's tangent; an elastic material keeps the full stiffness.
+TEST(shell_BelytschkoTsay, PhysicalStabilisationYieldsWithAPlasticMaterial) {
+  const Real E = 2.0e5, nu = 0.3, rho = 7.8e-3, sy = 200.0, t = 0.1, a = 1.0, b = 0.5, A = 4 * a * b;
+  const J2PlasticShellMaterial steel(E, nu, rho, sy, 0.0);
+  ShellSection section;  // physical
+  BelytschkoTsayShell shell(section, steel);
+  const NodeMatrix x = element(Mat3::Identity(), 2 * a, 2 * b);
+  const Real hpat[4] = {1, -1, 1, -1};
+  NodeMatrix v = NodeMatrix::Zero();
+  for (int n = 0; n < 4; ++n) v(0, n) = hpat[n];
+  // elastic range: Q = (E t A |b_x|^2 / 12) gamma . u; far beyond it: the bound
+  const Real bx = 1.0 / (2.0 * a), gamma_u_per_q = 4.0;
+  auto hourglass_resultant = [&](Real q) {
+    std::vector<Real> stress(static_cast<std::size_t>(shell.stress_size()), 0.0);
+    Real hg[BelytschkoTsayShell::kHourglassSize] = {};
+    Real h = t;
+    shell.update(x, q * v, NodeMatrix::Zero(), 1.0, stress.data(), hg, h);
+    return hg[3];
+  };
+  const Real q_small = 1e-6;
+  EXPECT_NEAR(hourglass_resultant(q_small), E * t * A * bx * bx / 12.0 * gamma_u_per_q * q_small, 1e-9 * E * t * A * q_small);
+  EXPECT_NEAR(hourglass_resultant(1e-1), sy * t * A * bx / 6.0, 1e-12 * sy * t * A);
+  // an element stretched beyond yield: the hourglass increment of the next step is much softer
+  std::vector<Real> stress(static_cast<std::size_t>(shell.stress_size()), 0.0);
+  Real hg[BelytschkoTsayShell::kHourglassSize] = {};
+  Real h = t;
+  NodeMatrix stretch = NodeMatrix::Zero();
+  for (int n = 0; n < 4; ++n) stretch(0, n) = 0.01 * x(0, n);  // d_xx = 0.01 per unit time: yields in one step
+  shell.update(x, stretch, NodeMatrix::Zero(), 1.0, stress.data(), hg, h);
+  const Real flowing = [&] {
+    const Real before = hg[3];
+    shell.update(x, stretch + q_small * v, NodeMatrix::Zero(), 1.0, stress.data(), hg, h);
+    return hg[3] - before;
+  }();
+  EXPECT_LT(std::abs(flowing), 0.5 * E * t * A * bx * bx / 12.0 * gamma_u_per_q * q_small);
+}
+
 }  // namespace
 }  // namespace lamina::shell
