@@ -155,8 +155,10 @@ TEST(shell_StaticBenchmarks, ScordelisLoRoofConvergesToMacNealHarder) {
 
 TEST(shell_StaticBenchmarks, PinchedCylinderApproachesMacNealHarder) {
   const ShellSection physical;
-  const Real r8 = pinched_cylinder(8, physical), r16 = pinched_cylinder(16, physical);
-  std::printf("pinched cylinder u / 1.8248e-5: 8x8 %.4f, 16x16 %.4f\n", r8, r16);
+  const Real r8 = pinched_cylinder(8, physical), r16 = pinched_cylinder(16, physical), r32 = pinched_cylinder(32, physical);
+  std::printf("pinched cylinder u / 1.8248e-5: 8x8 %.4f, 16x16 %.4f, 32x32 %.4f\n", r8, r16, r32);
+  EXPECT_GT(r32, r16);
+  EXPECT_NEAR(r32, 1.0, 0.03);
   // one-point / MITC4-class elements reach about 0.95 at 16 x 16 (MacNeal-Harder; Belytschko-Leviathan 1994)
   EXPECT_GT(r16, r8);
   EXPECT_NEAR(r16, 1.0, 0.1) << "8: " << r8 << " 16: " << r16;
