@@ -60,7 +60,7 @@ class MpmAnalysis : public Analysis {
   std::map<std::string, Real> timings() const override;
   /// j2_plasticity set-ups that run but mislead: 3 or fewer thickness points (the section cannot carry
   /// much more than the first-yield moment), sudden quasi-static increments (early yield from the
-  /// overshoot), a membrane hourglass coefficient of 0.05 or more (stiffens plastic folds).
+  /// overshoot), a membrane hourglass coefficient of 0.05 or more with the coefficient springs (stiffens plastic folds).
   std::vector<std::string> warnings() const override;
 
   /// One explicit step at load factor `load` (quasi-static) or the current time (dynamic).
