@@ -659,8 +659,19 @@ OutputFrame MpmAnalysis::frame() const {
 
 std::vector<std::string> MpmAnalysis::warnings() const {
   std::vector<std::string> out;
-  if (problem_.material != MpmProblem::Material::j2_plasticity) return out;
   const shell::ShellSection& s = problem_.section;
+  // rz held at most nodes (a habit from codes without drilling stiffness): with the drilling penalty that
+  // also holds the elements' in-plane rotation there
+  if (s.hourglass_model == shell::HourglassModel::physical && s.drilling > 0.0 && rotation_free_.cols() > 0) {
+    const Index held = (rotation_free_.row(2).array() == 0.0).count();
+    if (2 * held > rotation_free_.cols())
+      out.push_back(fmt::format("rz is fixed at {} of {} nodes: the drilling penalty (shell.drilling = {:g}) ties rz to the "
+                                "in-plane rotation of the elements, so this also holds that rotation and stiffens "
+                                "in-plane bending; leave rz free (the penalty already removes the drilling singularity) "
+                                "or set shell.drilling: 0",
+                                held, rotation_free_.cols(), s.drilling));
+  }
+  if (problem_.material != MpmProblem::Material::j2_plasticity) return out;
   if (s.thickness_points <= 3)
     out.push_back(fmt::format("shell.thickness_points = {} with j2_plasticity: so few points cannot represent plastic "
                               "bending (3 Lobatto points carry at most the first-yield moment, a real section 1.5 x); use 7",

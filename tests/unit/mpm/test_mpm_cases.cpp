@@ -157,6 +157,19 @@ probes:
   EXPECT_NEAR(summary_value("initial_velocity", "energy_ratio"), 1.0, 0.01);
 }
 
+TEST(mpm_Cases, RzFixedEverywhereIsWarnedAbout) {
+  // a flat membrane with rz held at every node: the drilling penalty would hold the in-plane rotation
+  std::string yaml = kStrip;
+  const std::string clamp_line = "  - {select: {set: xmin}, fix: [x, y, z, rx, ry, rz]}\n";
+  yaml.replace(yaml.find(clamp_line), clamp_line.size(), clamp_line + "  - {select: all, fix: [rz]}\n");
+  const Outcome held = run_case("rz_everywhere", yaml, "", true);
+  ASSERT_EQ(held.exit_code, 0) << held.output;
+  EXPECT_NE(held.output.find("warning: rz is fixed at 22 of 22 nodes"), std::string::npos) << held.output;
+  const Outcome clamp = run_case("rz_clamp_only", kStrip, "", true);
+  ASSERT_EQ(clamp.exit_code, 0) << clamp.output;
+  EXPECT_EQ(clamp.output.find("rz is fixed"), std::string::npos) << clamp.output;
+}
+
 TEST(mpm_Cases, PlasticSetUpsThatMisleadAreWarnedAbout) {
   const std::string yaml = R"(
 title: plastic strip
