@@ -1,7 +1,10 @@
 #include "io/result_set.hpp"
 
 #include <fmt/format.h>
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <stdexcept>
 
@@ -11,9 +14,35 @@ namespace lamina::io {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+/// Remove the staging folders `<destination>.partial-PID` left by processes that no longer run (a
+/// killed run cannot clean up after itself). A folder of a live process (another run writing to the
+/// same destination) is kept. PIDs are of this machine: a folder on a shared file system written by a
+/// run on another host whose PID happens to be free here would be removed too.
+void remove_stale_staging(const fs::path& destination) {
+  const fs::path parent = destination.parent_path().empty() ? fs::path(".") : destination.parent_path();
+  const std::string prefix = destination.filename().string() + ".partial-";
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(parent, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid == ::getpid()) continue;
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
+    std::error_code ignored;
+    fs::remove_all(entry.path(), ignored);
+  }
+}
+
+}  // namespace
+
 ResultSet::ResultSet(fs::path output_directory) : destination_(std::move(output_directory)) {
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
   fs::create_directories(destination_.parent_path().empty() ? fs::path(".") : destination_.parent_path());
+  remove_stale_staging(destination_);
   staging_ = destination_;
   staging_ += fmt::format(".partial-{}", ::getpid());
   fs::remove_all(staging_);
