@@ -217,7 +217,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   for (int i = 0; i < kHourglassSize; ++i) {
     const Real rate = hg.vx[i].dot(vx) + hg.vy[i].dot(vy) + hg.vz[i].dot(vz) + hg.tx[i].dot(tx) + hg.ty[i].dot(ty) +
                       hg.tz[i].dot(tz);
-    if (hg.stiffness[i] == 0.0) continue;
+    if (hg.stiffness[i] == 0.0 && hourglass[i] == 0.0) continue;  // (a held resultant still acts)
     const Real old = hourglass[i];
     hourglass[i] = std::clamp(hourglass[i] + dt * hg.stiffness[i] * rate, -hg.limit[i], hg.limit[i]);
     hg_power += 0.5 * (old + hourglass[i]) * rate;
