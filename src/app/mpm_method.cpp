@@ -54,9 +54,8 @@ void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, sh
   s.thickness_points = static_cast<int>(section.integer("thickness_points", 3, 1, 7));
   // hourglass: `physical` (default) or a coefficient r (the seed's springs, with the per-mode keys)
   const io::NodeReader hourglass = section.child("hourglass");
-  const bool word = hourglass.defined() && hourglass.is_scalar() && !hourglass.node().as<std::string>().empty() &&
-                    std::isalpha(static_cast<unsigned char>(hourglass.node().as<std::string>()[0]));
-  if (word) {
+  const std::string text = hourglass.defined() && hourglass.is_scalar() ? hourglass.node().as<std::string>() : "";
+  if (!text.empty() && std::isalpha(static_cast<unsigned char>(text[0]))) {  // a word, not a number
     if (hourglass.as_word({"physical"})) s.hourglass_model = shell::HourglassModel::physical;
   } else if (hourglass.defined()) {
     s.hourglass_model = shell::HourglassModel::coefficients;

@@ -245,6 +245,18 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   return out;
 }
 
+namespace {
+
+/// h = [1, -1, 1, -1] and the Flanagan-Belytschko gamma = h - (h . x) b1 - (h . y) b2 (zero on linear fields).
+Eigen::Matrix<Real, 1, 4> hourglass_vector() { return (Eigen::Matrix<Real, 1, 4>() << 1.0, -1.0, 1.0, -1.0).finished(); }
+Eigen::Matrix<Real, 1, 4> hourglass_gamma(const Eigen::Matrix<Real, 1, 4>& xh, const Eigen::Matrix<Real, 1, 4>& yh,
+                                          const Eigen::Matrix<Real, 1, 4>& b1, const Eigen::Matrix<Real, 1, 4>& b2) {
+  const Eigen::Matrix<Real, 1, 4> hv = hourglass_vector();
+  return hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
+}
+
+}  // namespace
+
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(const Row4& xh, const Row4& yh,
                                                                                const Row4& b1, const Row4& b2, Real h,
                                                                                Real area) const {
@@ -254,9 +266,8 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
   const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
   const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : r;
   const Real r_w = section_.hourglass_transverse >= 0.0 ? section_.hourglass_transverse : r;
-  Row4 hv;
-  hv << 1.0, -1.0, 1.0, -1.0;
-  const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;
+  const Row4 hv = hourglass_vector();
+  const Row4 gamma = hourglass_gamma(xh, yh, b1, b2);
   const Real bsq = b1.squaredNorm() + b2.squaredNorm();
   const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
   const Real c_bend = r_bend * E * h * h * h * area / 192.0 * bsq;
@@ -295,9 +306,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
                                                                             Real area, Real tangent_membrane,
                                                                             Real tangent_bending) const {
   HourglassRates out;
-  Row4 hv;
-  hv << 1.0, -1.0, 1.0, -1.0;
-  const Row4 gamma = hv - hv.dot(xh) * b1 - hv.dot(yh) * b2;  // gamma . u = 4 q for u = q xi eta
+  const Row4 gamma = hourglass_gamma(xh, yh, b1, b2);  // gamma . u = 4 q for u = q xi eta
   const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
   // membrane and bending: energy of the bilinear mode's normal strain alone (the parasitic shear of
   // the bilinear field left out, so pure in-plane / out-of-plane bending is exact on rectangles):
