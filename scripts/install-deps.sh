@@ -13,7 +13,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libsuitesparse-dev libspectra-dev
   libyaml-cpp-dev libmuparser-dev libcli11-dev libfmt-dev nlohmann-json3-dev
-  libnanoflann-dev libgmsh-dev
+  libnanoflann-dev libgmsh-dev zlib1g-dev
   libopenblas0-openmp
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy python3-vtk9

@@ -50,6 +50,8 @@ int main(int argc, char** argv) {
   run->add_option("--threads", run_options.threads, "OpenMP threads (default: all)")->check(CLI::NonNegativeNumber);
   run->add_option("--set", run_options.overrides, "override a case value: key.path=value")->take_all();
   run->add_flag("--quiet", run_options.quiet, "no progress output");
+  run->add_option("--restart", run_options.restart_directory,
+                  "continue from the newest valid checkpoint in this result folder (docs/restart.md)");
 
   std::string check_path;
   std::vector<std::string> check_overrides;
@@ -89,6 +91,8 @@ int main(int argc, char** argv) {
       } else if (result.exit_code == 3) {
         std::cerr << "lamina run: the analysis failed: " << result.error << "\n"
                   << "the last good state is in " << result.output_directory.string() << "\n";
+      } else if (result.exit_code >= 128) {
+        std::cerr << "lamina run: " << result.error << "\n";
       } else if (!run_options.quiet) {
         std::cerr << "results: " << result.output_directory.string() << "\n";
       }

@@ -25,6 +25,9 @@ struct MethodEntry {
   std::function<std::unique_ptr<MethodOptions>(const io::Case&, const io::NodeReader& section)> read_options;
   /// Build the analysis on the prepared model (nodes, selections resolved).
   std::function<std::unique_ptr<Analysis>(const io::Case&, const Model&, const MethodOptions&)> create;
+  /// Dotted case keys that may differ between a run and its restart (`--restart`), besides output:
+  /// e.g. the end time of an explicit run, so that a finished run can be continued.
+  std::vector<std::string> restart_keys = {};
 };
 
 /// All methods compiled into this binary.

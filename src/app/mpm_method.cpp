@@ -239,7 +239,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
 MethodEntry mpm_method_entry() {
   return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true},
                      "CPDI2 material point method with Belytschko-Tsay shell domains, explicit / quasi-static (seed 000)",
-                     read_mpm, create_mpm};
+                     read_mpm, create_mpm, {"mpm.end_time"}};
 }
 
 }  // namespace lamina::app

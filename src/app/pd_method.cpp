@@ -342,7 +342,7 @@ std::unique_ptr<Analysis> create_pd(const io::Case& c, const Model& model, const
 MethodEntry pd_method_entry() {
   return MethodEntry{io::MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true},
                      "Linearized state-based peridynamics: ADR quasi-static, explicit, linear, buckling (seed 002)",
-                     read_pd, create_pd};
+                     read_pd, create_pd, {"pd.explicit.end_time"}};
 }
 
 }  // namespace lamina::app

@@ -4,15 +4,18 @@
 #include <omp.h>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <iostream>
 #include <sstream>
 
+#include "app/checkpointing.hpp"
 #include "app/model.hpp"
 #include "app/progress_line.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/case_reader.hpp"
+#include "io/checkpoint_file.hpp"
 #include "io/omll_deck.hpp"
 #include "io/result_set.hpp"
 
@@ -66,9 +69,69 @@ class RunSink : public OutputSink {
     last_values_ = values;
     if (case_.output.vtu && (output_count_ % case_.output.every == 0)) results_.write_frame(analysis_.frame(), time);
     ++output_count_;
+    ++outputs_since_checkpoint_;
   }
 
   void progress(Real fraction, const std::string& status) override { progress_.update(fraction, status); }
+
+  /// output.checkpoint: every n-th output point and / or every s seconds; the case text the
+  /// checkpoint must match on restart.
+  void enable_checkpoints(int every, Real seconds, std::string case_text) {
+    checkpoints_ = true;
+    every_ = every;
+    seconds_ = seconds;
+    case_text_ = std::move(case_text);
+    last_checkpoint_ = std::chrono::steady_clock::now();
+  }
+
+  void safe_point() override {
+    if (!checkpoints_) return;
+    const int signal = stop_signal();
+    const bool due = signal != 0 || (every_ > 0 && outputs_since_checkpoint_ >= every_) ||
+                     (seconds_ > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint_).count() >= seconds_);
+    if (due) write_checkpoint();
+    if (signal != 0) throw RunInterrupted{signal};
+  }
+
+  void write_checkpoint() {
+    StateWriter out;
+    out.put("run.format", "lamina checkpoint");
+    out.put("run.lamina_version", std::string(version));
+    out.put("run.case", case_text_);
+    out.put("run.threads", omp_get_max_threads());
+    out.put("run.sequence", ++sequence_);
+    out.put("run.output_count", output_count_);
+    const Index columns = static_cast<Index>(result_.history_columns.size());
+    Eigen::MatrixXd history(columns, static_cast<Index>(result_.history_rows.size()));
+    for (std::size_t r = 0; r < result_.history_rows.size(); ++r)
+      for (Index k = 0; k < columns; ++k) history(k, static_cast<Index>(r)) = result_.history_rows[r][static_cast<std::size_t>(k)];
+    out.put_matrix("run.history", history);
+    out.put("run.frame_times", results_.frame_times());
+    out.put("run.last_values", last_values_);
+    analysis_.save_state(out);
+    const auto file = results_.write_checkpoint(sequence_, out.bytes());
+    const Index step = result_.history_rows.empty() ? 0 : static_cast<Index>(result_.history_rows.back().front());
+    results_.log(fmt::format("checkpoint {} written after output step {} ({} bytes)", file.filename().string(), step,
+                             out.bytes().size()));
+    outputs_since_checkpoint_ = 0;
+    last_checkpoint_ = std::chrono::steady_clock::now();
+  }
+
+  /// A restart: the history and counters of the run that wrote the checkpoint (after start()).
+  void restore(const StateReader& in) {
+    sequence_ = in.integer("run.sequence");
+    output_count_ = in.integer("run.output_count");
+    const Eigen::MatrixXd history = in.matrix("run.history");
+    if (history.rows() != static_cast<Index>(result_.history_columns.size()))
+      throw StateError(fmt::format("the checkpoint's history has {} columns, this run {}", history.rows(),
+                                   result_.history_columns.size()));
+    for (Index r = 0; r < history.cols(); ++r) {
+      std::vector<Real> row(history.col(r).data(), history.col(r).data() + history.rows());
+      results_.history_row(static_cast<Index>(row[0]), row[1], row[2], std::vector<Real>(row.begin() + 3, row.end()));
+      result_.history_rows.push_back(std::move(row));
+    }
+    last_values_ = in.reals("run.last_values");
+  }
 
   nlohmann::json probes_json() const {
     nlohmann::json probes = nlohmann::json::object();
@@ -88,6 +151,13 @@ class RunSink : public OutputSink {
   std::vector<std::string> names_, builtin_names_;
   std::vector<Real> last_values_;
   Index output_count_ = 0;
+  // checkpoints
+  bool checkpoints_ = false;
+  int every_ = 0;
+  Real seconds_ = 0;
+  std::string case_text_;
+  Index sequence_ = 0, outputs_since_checkpoint_ = 0;
+  std::chrono::steady_clock::time_point last_checkpoint_;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -174,16 +244,61 @@ RunResult run_case(const RunOptions& options) {
   }
   const double setup_seconds = seconds_since(start);
 
+  // --restart: the newest intact checkpoint, written by this case (apart from the restart keys)
+  const std::string case_text = restart_invariant_case(c, prepared.method->restart_keys);
+  LoadedCheckpoint checkpoint;
+  const bool restart = !options.restart_directory.empty();
+  std::vector<std::string> warnings = analysis->warnings();
+  if (restart) {
+    try {
+      if (!analysis->can_checkpoint())
+        throw InputError("--restart", "an incremental analysis (pd quasi_static / explicit, mpm)",
+                         fmt::format("a {} analysis without a step-by-step state", c.method));
+      checkpoint = load_newest_checkpoint(options.restart_directory);
+      for (const auto& refused : checkpoint.refused) warnings.push_back("checkpoint refused, an older one used: " + refused);
+      if (const auto d = first_case_difference(checkpoint.state->text("run.case"), case_text)) {
+        std::string changeable = "output";
+        for (const auto& k : prepared.method->restart_keys) changeable += ", " + k;
+        throw locate(InputError(d->key_path,
+                                fmt::format("{}, the value of the run that wrote {} (a restart may change only {})",
+                                            d->written, checkpoint.file.filename().string(), changeable),
+                                d->current),
+                     c);
+      }
+      const auto written_threads = checkpoint.state->integer("run.threads");
+      if (written_threads != omp_get_max_threads())
+        warnings.push_back(fmt::format("the checkpoint was written with {} threads, this run has {}: the continued run "
+                                       "is not bit-identical to an uninterrupted one",
+                                       written_threads, omp_get_max_threads()));
+      analysis->restore_state(*checkpoint.state);
+    } catch (const InputError& e) {
+      result.exit_code = 2;
+      result.error = e.what();
+      return result;
+    } catch (const StateError& e) {
+      result.exit_code = 2;
+      result.error = fmt::format("--restart: {} does not fit this case: {}", checkpoint.file.string(), e.what());
+      return result;
+    }
+  } else if ((c.output.checkpoint_every > 0 || c.output.checkpoint_seconds > 0) && !analysis->can_checkpoint()) {
+    warnings.push_back(fmt::format("output.checkpoint is ignored: a {} analysis of this kind has no incremental state",
+                                   c.method));
+  }
+
   result.output_directory = options.output_directory.empty() ? std::filesystem::path("out") / c.stem
                                                               : std::filesystem::path(options.output_directory);
-  io::ResultSet results(result.output_directory);
+  io::ResultSet results(result.output_directory, !restart);
+  if (restart) {
+    results.adopt(checkpoint.file.parent_path(), checkpoint.state->reals("run.frame_times"));
+    results.remove_stale_staging();
+  }
   std::ostringstream header;
   header << fmt::format("lamina {} ({} build, {} threads)\ncase: {} ({})\nmethod: {}\nunits: {}\nnodes: {}\n", version,
                         build_type, omp_get_max_threads(), c.file, c.title, c.method, c.units.empty() ? "(not given)" : c.units,
                         model.cloud.size());
   results.log(header.str());
+  if (restart) results.log(fmt::format("restarted from {}", checkpoint.file.string()));
   results.log("resolved case:\n" + resolved_yaml(c) + "\n");
-  const std::vector<std::string> warnings = analysis->warnings();
   for (const auto& w : warnings) {
     results.log("WARNING: " + w);
     if (!options.quiet) fmt::print(stderr, "lamina: warning: {}\n", w);
@@ -199,10 +314,34 @@ RunResult run_case(const RunOptions& options) {
   if (!c.units.empty()) summary["units"] = c.units;
   if (!warnings.empty()) summary["warnings"] = warnings;
   const auto run_start = std::chrono::steady_clock::now();
+  struct StopHandlers {  // SIGTERM / SIGINT recorded for the next safe point while the analysis runs
+    explicit StopHandlers(bool on) : on(on) {
+      if (on) install_stop_handlers();
+    }
+    ~StopHandlers() {
+      if (on) restore_stop_handlers();
+    }
+    bool on;
+  } stop_handlers(analysis->can_checkpoint());
+  if (analysis->can_checkpoint())
+    sink.enable_checkpoints(c.output.checkpoint_every, c.output.checkpoint_seconds, case_text);
+  if (restart) summary["restarted_from"] = checkpoint.file.string();
   try {
     sink.start();
+    if (restart) sink.restore(*checkpoint.state);
     analysis->run(sink);
     summary["status"] = "ok";
+  } catch (const RunInterrupted& stop) {
+    result.exit_code = 128 + stop.signal;
+    result.error = fmt::format("stopped by {} after writing a checkpoint; continue with --restart {}",
+                               stop.signal == SIGTERM ? "SIGTERM" : stop.signal == SIGINT ? "SIGINT" : "a signal",
+                               result.output_directory.string());
+    summary["status"] = "interrupted";
+    summary["error"] = result.error;
+  } catch (const StateError& e) {
+    result.exit_code = 2;
+    result.error = fmt::format("--restart: {} does not fit this case: {}", checkpoint.file.string(), e.what());
+    return result;
   } catch (const InputError& e) {
     result.exit_code = 2;
     result.error = locate(e, c).what();
@@ -221,7 +360,9 @@ RunResult run_case(const RunOptions& options) {
   for (const auto& [name, value] : analysis->timings()) timing["stage_" + name] = value;
   summary["timing"] = timing;
   results.write_summary(summary);
-  results.log(result.exit_code == 0 ? "NORMAL TERMINATION" : "ERROR TERMINATION: " + result.error);
+  results.log(result.exit_code == 0    ? "NORMAL TERMINATION"
+              : result.exit_code >= 128 ? "INTERRUPTED: " + result.error
+                                        : "ERROR TERMINATION: " + result.error);
   results.log(fmt::format("total time {:.3f} s", seconds_since(start)));
   results.commit();
   result.summary = summary;

@@ -1,6 +1,7 @@
 #pragma once
 // `lamina run` and `lamina check`: read and validate a case, build the model, run the method,
-// write the result set. Returns PRODUCT.md exit codes (0 ok, 1 internal, 2 input, 3 analysis).
+// write the result set. Returns PRODUCT.md exit codes (0 ok, 1 internal, 2 input, 3 analysis; 128 + signal
+// when SIGTERM / SIGINT stopped the run after writing a checkpoint).
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -19,6 +20,7 @@ struct RunOptions {
   int threads = 0;               // 0 => OpenMP default
   std::vector<std::string> overrides;
   bool quiet = false;
+  std::string restart_directory;  // --restart: continue from its newest valid checkpoint
 };
 
 /// A case read and validated, with its method's options.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/probe.hpp"
+#include "core/state_archive.hpp"
 #include "core/types.hpp"
 
 namespace lamina {
@@ -39,6 +40,15 @@ class OutputSink {
   virtual void output_point(Index step, Real time, Real load_factor) = 0;
   /// Progress of a long run: fraction done in [0,1] and a short status text.
   virtual void progress(Real fraction, const std::string& status) = 0;
+  /// Called after every step / increment (and after output_point where both fall together), when the
+  /// analysis' state is complete: the application may write a checkpoint here (Analysis::save_state)
+  /// or stop the run by throwing RunInterrupted.
+  virtual void safe_point() {}
+};
+
+/// Thrown out of Analysis::run from a safe point when the run was asked to stop (SIGTERM / SIGINT).
+struct RunInterrupted {
+  int signal = 0;
 };
 
 class Analysis {
@@ -59,6 +69,14 @@ class Analysis {
   /// without a locking remedy), one sentence each; known after construction. The application prints
   /// them, writes them to log.txt and lists them in summary.json.
   virtual std::vector<std::string> warnings() const { return {}; }
+
+  // Checkpoint / restart (incremental analyses). save_state is called from OutputSink::safe_point;
+  // restore_state before run(), which then continues from the saved step. A restored run repeats the
+  // uninterrupted one bit for bit at the same thread count.
+  virtual bool can_checkpoint() const { return false; }
+  virtual void save_state(StateWriter& out) const {}
+  /// Throws StateError when the state does not fit this analysis.
+  virtual void restore_state(const StateReader& in) {}
 };
 
 }  // namespace lamina

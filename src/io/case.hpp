@@ -92,6 +92,10 @@ struct Discretization {
 struct OutputOptions {
   bool vtu = true;
   int every = 1;  // write every n-th output point as VTU (history gets all)
+  // output.checkpoint (incremental analyses): every n-th output point and/or every s seconds of
+  // wall-clock time; 0 = not by that measure; both 0 = no checkpoints (SIGTERM / SIGINT still write one).
+  int checkpoint_every = 0;
+  Real checkpoint_seconds = 0;
 };
 
 struct Case {

@@ -631,6 +631,14 @@ Case CaseReader::read() {
   if (o.defined() && o.expect_map()) {
     c.output.vtu = o.boolean("vtu", true);
     c.output.every = static_cast<int>(o.integer("every", 1, 1, 1000000));
+    NodeReader checkpoint = o.child("checkpoint");
+    if (checkpoint.defined() && checkpoint.expect_map()) {
+      if (checkpoint.has("every")) c.output.checkpoint_every = static_cast<int>(checkpoint.integer("every", 1, 1, 1000000000));
+      if (checkpoint.has("seconds")) c.output.checkpoint_seconds = checkpoint.real("seconds", 60.0, 0.0, INFINITY, true);
+      if (!checkpoint.has("every") && !checkpoint.has("seconds"))
+        checkpoint.error("every: N (output points) or seconds: S (wall-clock)", "neither");
+      checkpoint.reject_unknown_keys();
+    }
     o.reject_unknown_keys();
   }
 

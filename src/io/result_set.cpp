@@ -4,23 +4,23 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 
 #include <stdexcept>
 
+#include "io/checkpoint_file.hpp"
 #include "io/vtu_writer.hpp"
 
 namespace lamina::io {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-/// Remove the staging folders `<destination>.partial-PID` left by processes that no longer run (a
-/// killed run cannot clean up after itself). A folder of a live process (another run writing to the
-/// same destination) is kept. PIDs are of this machine: a folder on a shared file system written by a
-/// run on another host whose PID happens to be free here would be removed too.
-void remove_stale_staging(const fs::path& destination) {
+/// A folder of a live process (another run writing to the same destination) is not listed. PIDs are
+/// of this machine: a folder on a shared file system written by a run on another host whose PID
+/// happens to be free here is listed too.
+std::vector<fs::path> staging_folders_of_dead_runs(const fs::path& destination) {
+  std::vector<fs::path> folders;
   const fs::path parent = destination.parent_path().empty() ? fs::path(".") : destination.parent_path();
   const std::string prefix = destination.filename().string() + ".partial-";
   std::error_code ec;
@@ -32,17 +32,16 @@ void remove_stale_staging(const fs::path& destination) {
     const pid_t pid = static_cast<pid_t>(std::stol(digits));
     if (pid == ::getpid()) continue;
     if (::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
-    std::error_code ignored;
-    fs::remove_all(entry.path(), ignored);
+    folders.push_back(entry.path());
   }
+  std::sort(folders.begin(), folders.end());
+  return folders;
 }
 
-}  // namespace
-
-ResultSet::ResultSet(fs::path output_directory) : destination_(std::move(output_directory)) {
+ResultSet::ResultSet(fs::path output_directory, bool remove_stale) : destination_(std::move(output_directory)) {
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
   fs::create_directories(destination_.parent_path().empty() ? fs::path(".") : destination_.parent_path());
-  remove_stale_staging(destination_);
+  if (remove_stale) remove_stale_staging();
   staging_ = destination_;
   staging_ += fmt::format(".partial-{}", ::getpid());
   fs::remove_all(staging_);
@@ -77,6 +76,41 @@ void ResultSet::write_frame(const OutputFrame& frame, Real time) {
   write_vtu((staging_ / name).string(), frame);
   frames_.emplace_back(time, name);
   write_pvd((staging_ / "result.pvd").string(), frames_);
+}
+
+std::vector<Real> ResultSet::frame_times() const {
+  std::vector<Real> times;
+  for (const auto& [time, name] : frames_) times.push_back(time);
+  return times;
+}
+
+void ResultSet::adopt(const fs::path& folder, const std::vector<Real>& frame_times) {
+  frames_.clear();
+  for (std::size_t k = 0; k < frame_times.size(); ++k) {
+    const std::string name = fmt::format("frame_{:05d}.vtu", k);
+    if (!fs::exists(folder / name))
+      throw std::runtime_error(fmt::format("restart: {} is missing from {}", name, folder.string()));
+    fs::copy_file(folder / name, staging_ / name, fs::copy_options::overwrite_existing);
+    frames_.emplace_back(frame_times[k], name);
+  }
+  if (!frames_.empty()) write_pvd((staging_ / "result.pvd").string(), frames_);
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("checkpoint_", 0) == 0 && entry.path().extension() == ".bin")
+      fs::copy_file(entry.path(), staging_ / name, fs::copy_options::overwrite_existing);
+  }
+}
+
+void ResultSet::remove_stale_staging() {
+  for (const auto& folder : staging_folders_of_dead_runs(destination_)) {
+    std::error_code ignored;
+    fs::remove_all(folder, ignored);
+  }
+}
+
+fs::path ResultSet::write_checkpoint(Index sequence, const std::vector<char>& payload) {
+  return io::write_checkpoint(staging_, sequence, payload);
 }
 
 void ResultSet::log(const std::string& text) {

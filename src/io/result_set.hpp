@@ -14,9 +14,14 @@
 
 namespace lamina::io {
 
+/// The staging folders `<destination>.partial-PID` of processes that no longer run (killed runs).
+std::vector<std::filesystem::path> staging_folders_of_dead_runs(const std::filesystem::path& destination);
+
 class ResultSet {
  public:
-  explicit ResultSet(std::filesystem::path output_directory);
+  /// remove_stale: remove the staging folders of dead runs now (a restart first adopts what it needs
+  /// from one, then calls remove_stale_staging()).
+  explicit ResultSet(std::filesystem::path output_directory, bool remove_stale = true);
   ~ResultSet();  // removes the staging folder if commit() was not called
 
   const std::filesystem::path& staging() const { return staging_; }
@@ -26,6 +31,14 @@ class ResultSet {
   void history_row(Index step, Real time, Real load_factor, const std::vector<Real>& probe_values);
   /// Writes frame_<k>.vtu and refreshes result.pvd.
   void write_frame(const OutputFrame& frame, Real time);
+  /// Times of the frames written so far (frame k is frame_<k>.vtu).
+  std::vector<Real> frame_times() const;
+  /// A restart: copy the first frame_times.size() frames and the checkpoints of a folder written by an
+  /// earlier run of the case into the staging folder, and list those frames in result.pvd.
+  void adopt(const std::filesystem::path& folder, const std::vector<Real>& frame_times);
+  void remove_stale_staging();
+  /// checkpoint_<sequence>.bin in the staging folder (io/checkpoint_file.hpp); the newest two are kept.
+  std::filesystem::path write_checkpoint(Index sequence, const std::vector<char>& payload);
   void log(const std::string& text);
   void write_summary(const nlohmann::json& summary);
   /// Move the staging folder into place (replacing an older result set).

@@ -484,11 +484,15 @@ Real MpmAnalysis::advance(Real load) {
 
 void MpmAnalysis::run(OutputSink& sink) {
   const MpmOptions& o = problem_.options;
-  if (o.analysis == MpmOptions::Kind::quasi_static) {
+  if (!resumed_) {
     sink.output_point(0, 0.0, 0.0);
-    for (int level = 1; level <= o.load_levels; ++level) {
+    loop_ = RunLoop{};
+  }
+  if (o.analysis == MpmOptions::Kind::quasi_static) {
+    for (; loop_.level <= o.load_levels; ++loop_.level, loop_.level_steps = 0) {
+      const int level = loop_.level;
       const Real load = static_cast<Real>(level) / o.load_levels, previous = static_cast<Real>(level - 1) / o.load_levels;
-      Index level_steps = 0;
+      Index& level_steps = loop_.level_steps;
       while (true) {
         const bool ramping = level_steps < o.level_ramp_steps;
         advance(ramping ? previous + (load - previous) * static_cast<Real>(level_steps + 1) / static_cast<Real>(o.level_ramp_steps)
@@ -503,24 +507,27 @@ void MpmAnalysis::run(OutputSink& sink) {
           sink.progress((level - 1 + std::min(1.0, -std::log10(std::max(residual_ratio_, 1e-30)) / -std::log10(o.tolerance))) /
                             o.load_levels,
                         fmt::format("level {}/{} residual {:.2e} dt {:.3g}", level, o.load_levels, residual_ratio_, dt_));
+        sink.safe_point();
       }
       level_residual_.push_back(residual_ratio_);
       sink.progress(static_cast<Real>(level) / o.load_levels,
                     fmt::format("level {}/{} residual {:.2e} steps {}", level, o.load_levels, residual_ratio_, steps_));
       sink.output_point(steps_, time_, load);
+      loop_.level_done = true;  // a checkpoint here resumes at the next level
+      sink.safe_point();
+      loop_.level_done = false;
     }
   } else {
-    sink.output_point(0, 0.0, 0.0);
-    int next = 1;
-    while (next <= o.output_points) {
-      const Real target = o.end_time * next / o.output_points;
+    while (loop_.next_output <= o.output_points) {
+      const Real target = o.end_time * loop_.next_output / o.output_points;
       advance(time_ / o.end_time);
       if (steps_ >= o.max_steps) throw AnalysisError(fmt::format("more than {} steps before the end time", o.max_steps));
       if (time_ >= target * (1 - 1e-12)) {
         sink.output_point(steps_, time_, std::min(1.0, time_ / o.end_time));
         sink.progress(time_ / o.end_time, fmt::format("t {:.4g} dt {:.3g}", time_, dt_));
-        ++next;
+        ++loop_.next_output;
       }
+      sink.safe_point();
     }
   }
 }
@@ -700,6 +707,76 @@ std::map<std::string, Real> MpmAnalysis::timings() const {
   std::map<std::string, Real> t;
   for (const auto& [name, seconds] : stage_seconds_) t[name + "_s"] = seconds;
   return t;
+}
+
+// The state after a step: node motion, element stresses and hourglass resultants, clocks and the
+// energy balance; the grid connectivity is rebuilt from the positions (a function of them alone).
+void MpmAnalysis::save_state(StateWriter& out) const {
+  out.put("mpm.nodes", static_cast<std::int64_t>(x_.cols()));
+  out.put("mpm.elements", problem_.mesh.element_count());
+  out.put_matrix("mpm.x", x_);
+  out.put_matrix("mpm.v", v_);
+  out.put_matrix("mpm.vpos", vpos_);
+  out.put_matrix("mpm.omega", omega_);
+  out.put_matrix("mpm.stress", stress_);
+  out.put_matrix("mpm.hourglass", hourglass_);
+  out.put_matrix("mpm.thickness", thickness_);
+  out.put_matrix("mpm.element_length", element_length_);
+  out.put("mpm.time", time_);
+  out.put("mpm.dt", dt_);
+  out.put("mpm.dt_previous", dt_previous_);
+  out.put("mpm.residual_ratio", residual_ratio_);
+  out.put("mpm.kinetic_previous", kinetic_previous_);
+  out.put("mpm.current_load", current_load_);
+  out.put("mpm.steps", steps_);
+  out.put("mpm.dt_control", dt_control_);
+  out.put("mpm.unconverged_levels", unconverged_levels_);
+  out.put("mpm.level_residual", level_residual_);
+  out.put("mpm.energy", std::vector<Real>{energy_.kinetic, energy_.internal, energy_.hourglass, energy_.external,
+                                          energy_.damping, energy_.transfer, energy_.initial_kinetic});
+  out.put("mpm.loop.level", loop_.level);
+  out.put("mpm.loop.level_steps", loop_.level_steps);
+  out.put("mpm.loop.level_done", loop_.level_done);
+  out.put("mpm.loop.next_output", loop_.next_output);
+}
+
+void MpmAnalysis::restore_state(const StateReader& in) {
+  if (in.integer("mpm.nodes") != x_.cols() || in.integer("mpm.elements") != problem_.mesh.element_count())
+    throw StateError(fmt::format("written for {} nodes and {} elements, this mesh has {} and {}", in.integer("mpm.nodes"),
+                                 in.integer("mpm.elements"), x_.cols(), problem_.mesh.element_count()));
+  in.matrix_into("mpm.x", x_);
+  in.matrix_into("mpm.v", v_);
+  in.matrix_into("mpm.vpos", vpos_);
+  in.matrix_into("mpm.omega", omega_);
+  in.matrix_into("mpm.stress", stress_);
+  in.matrix_into("mpm.hourglass", hourglass_);
+  in.matrix_into("mpm.thickness", thickness_);
+  in.matrix_into("mpm.element_length", element_length_);
+  time_ = in.real("mpm.time");
+  dt_ = in.real("mpm.dt");
+  dt_previous_ = in.real("mpm.dt_previous");
+  residual_ratio_ = in.real("mpm.residual_ratio");
+  kinetic_previous_ = in.real("mpm.kinetic_previous");
+  current_load_ = in.real("mpm.current_load");
+  steps_ = in.integer("mpm.steps");
+  dt_control_ = in.text("mpm.dt_control");
+  unconverged_levels_ = in.ints("mpm.unconverged_levels");
+  level_residual_ = in.reals("mpm.level_residual");
+  const std::vector<Real> e = in.reals("mpm.energy");
+  if (e.size() != 7) throw StateError("checkpoint record 'mpm.energy' has another size");
+  energy_.kinetic = e[0], energy_.internal = e[1], energy_.hourglass = e[2], energy_.external = e[3];
+  energy_.damping = e[4], energy_.transfer = e[5], energy_.initial_kinetic = e[6];
+  loop_.level = static_cast<int>(in.integer("mpm.loop.level"));
+  loop_.level_steps = in.integer("mpm.loop.level_steps");
+  loop_.level_done = in.boolean("mpm.loop.level_done");
+  loop_.next_output = static_cast<int>(in.integer("mpm.loop.next_output"));
+  if (loop_.level_done) {  // written after the level's output point: continue with the next level
+    ++loop_.level;
+    loop_.level_steps = 0;
+    loop_.level_done = false;
+  }
+  grid_.locate(x_);
+  resumed_ = true;
 }
 
 }  // namespace lamina::mpm

@@ -62,6 +62,10 @@ class MpmAnalysis : public Analysis {
   /// much more than the first-yield moment), sudden quasi-static increments (early yield from the
   /// overshoot), a membrane hourglass coefficient of 0.05 or more with the coefficient springs (stiffens plastic folds).
   std::vector<std::string> warnings() const override;
+  /// Checkpoints after any step (docs/restart.md).
+  bool can_checkpoint() const override { return true; }
+  void save_state(StateWriter& out) const override;
+  void restore_state(const StateReader& in) override;
 
   /// One explicit step at load factor `load` (quasi-static) or the current time (dynamic).
   /// Returns the step size used. Throws AnalysisError on instability.
@@ -131,6 +135,14 @@ class MpmAnalysis : public Analysis {
   std::vector<Real> level_residual_;      // residual ratio at each recorded load level
   EnergyBalance energy_;
   std::map<std::string, Real> stage_seconds_;
+  // where run() is (checkpointed): quasi-static level and its steps, or the next output point
+  struct RunLoop {
+    int level = 1;
+    Index level_steps = 0;
+    bool level_done = false;  // the checkpoint was written after the level's output point
+    int next_output = 1;
+  } loop_;
+  bool resumed_ = false;
 };
 
 }  // namespace lamina::mpm

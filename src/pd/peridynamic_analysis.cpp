@@ -222,7 +222,7 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
       lambda[d] = 1.0;
     }
   AdaptiveDynamicRelaxation relaxation(*solid_, lambda, free, options);
-  sink->output_point(0, 0.0, 0.0);
+  if (!resumed_) sink->output_point(0, 0.0, 0.0);
   // Start field of the first increment: inverse-distance interpolation of the prescribed values.
   auto interpolated_start = [&](Real factor) {
     PointMatrix u = PointMatrix::Zero(3, n);
@@ -247,14 +247,20 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     return u;
   };
   const Real nominal = 1.0 / static_cast<Real>(options.increments);
-  Real step = nominal, factor = 0.0, previous_factor = 0.0;
-  PointMatrix previous = PointMatrix::Zero(3, n), before_previous = previous;
-  bool have_two = false;
-  int cuts = 0;
-  Index increment = 0;
-  energy_damping_ = 0;
-  energy_external_ = 0;
-  PointMatrix generalized_force = PointMatrix::Zero(3, n);  // F_ext on free dofs, support force on prescribed ones
+  if (!resumed_) {
+    quasi_ = QuasiStaticLoop{};
+    quasi_.step = nominal;
+    quasi_.previous = quasi_.before_previous = PointMatrix::Zero(3, n);
+    quasi_.generalized_force = PointMatrix::Zero(3, n);  // F_ext on free dofs, support force on prescribed ones
+    energy_damping_ = 0;
+    energy_external_ = 0;
+  }
+  Real &step = quasi_.step, &factor = quasi_.factor, &previous_factor = quasi_.previous_factor;
+  PointMatrix &previous = quasi_.previous, &before_previous = quasi_.before_previous;
+  bool& have_two = quasi_.have_two;
+  int& cuts = quasi_.cuts;
+  Index& increment = quasi_.increment;
+  PointMatrix& generalized_force = quasi_.generalized_force;
   // Load path P(Delta) along the reference pattern g (the load at factor 1 or, displacement-controlled,
   // the prescribed field at factor 1): P = (F_generalized . g) / (g . g) G with G = |sum_i g_i| (the
   // total force of the pattern; half its absolute sum when it is self-equilibrated), Delta = g . u / G
@@ -272,9 +278,11 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
   const Real absolute_sum = path_direction.colwise().norm().sum();
   if (!(path_total_ > 1e-9 * absolute_sum)) path_total_ = 0.5 * absolute_sum;
   const Real path_norm2 = path_direction.squaredNorm();
-  path_load_.assign(1, 0.0);
-  path_displacement_.assign(1, 0.0);
-  total_iterations_ = 0;
+  if (!resumed_) {
+    path_load_.assign(1, 0.0);
+    path_displacement_.assign(1, 0.0);
+    total_iterations_ = 0;
+  }
   while (factor < 1.0 - 1e-12) {
     const Real target = std::min(1.0, factor + step);
     // Stage 1: start field of the increment.
@@ -338,6 +346,7 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     sink->output_point(increment, factor, factor);
     sink->progress(factor, fmt::format("increment {} load factor {:.4f} iterations {}", increment, factor, result.iterations));
     step = std::min(nominal, 2.0 * step);
+    sink->safe_point();
   }
 }
 
@@ -365,43 +374,71 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
       throw AnalysisError(fmt::format("explicit time step {:.4g} exceeds the critical step {:.4g}", dt, critical));
     timings_["critical_time_step"] = critical;
   }
+  ExplicitLoop& loop = explicit_;
+  Index steps = std::max<Index>(1, static_cast<Index>(std::ceil(options.end_time / dt - 1e-9)));
+  dt = options.end_time / static_cast<Real>(steps);
+  if (resumed_ && options.end_time != loop.end_time) {
+    // a restart with another end time: the rest of the run, from the checkpoint's time, in steps of
+    // at most the run's step
+    const Real now = loop.origin_time + static_cast<Real>(loop.step - loop.origin_step) * loop.time_step;
+    if (!(options.end_time > now))
+      throw InputError("pd.explicit.end_time", fmt::format("an end time after the checkpoint's time {:.6g}", now),
+                       fmt::format("{:.6g}", options.end_time));
+    const Index rest = std::max<Index>(1, static_cast<Index>(std::ceil((options.end_time - now) / loop.time_step - 1e-9)));
+    loop.origin_step = loop.step;
+    loop.origin_time = now;
+    dt = (options.end_time - now) / static_cast<Real>(rest);
+    steps = loop.step + rest;
+  } else if (!resumed_) {
+    loop = ExplicitLoop{};
+  }
+  loop.time_step = dt;
+  loop.end_time = options.end_time;
   timings_["time_step"] = dt;
   timings_["bonds"] = static_cast<Real>(body_->bonds());
-  const Index steps = std::max<Index>(1, static_cast<Index>(std::ceil(options.end_time / dt - 1e-9)));
-  dt = options.end_time / static_cast<Real>(steps);
   const Index every = std::max<Index>(1, steps / std::max(1, options.outputs));
   const std::vector<char> free = free_dofs(true);
   Eigen::Map<Eigen::VectorXd> u(u_.data(), 3 * n), v(velocity_.data(), 3 * n);
-  if (problem_.initial_velocity.cols() == n) velocity_ = problem_.initial_velocity;
-  apply_prescribed(u_, 0.0, false);
-  apply_prescribed(velocity_, 0.0, true);
+  if (!resumed_) {
+    if (problem_.initial_velocity.cols() == n) velocity_ = problem_.initial_velocity;
+    apply_prescribed(u_, 0.0, false);
+    apply_prescribed(velocity_, 0.0, true);
+  }
+  auto time_of = [&](Index step) { return loop.origin_time + static_cast<Real>(step - loop.origin_step) * dt; };
   auto forces = [&](Real t) {
     solid_->bond_state(u_, state_);
     internal_force_ = solid_->internal_force(state_);
     external_force_ = external_force(t / options.end_time);
   };
-  forces(0.0);
-  Eigen::VectorXd acceleration(3 * n);
+  Eigen::VectorXd& acceleration = loop.acceleration;
   auto accelerate = [&]() {
     const Eigen::Map<const Eigen::VectorXd> fi(internal_force_.data(), 3 * n), fe(external_force_.data(), 3 * n);
     acceleration = ((fi + fe).array() / mass.array()).matrix() - options.damping * v;
   };
-  accelerate();
   auto support_force = [&]() {  // external generalized force: loads on free dofs, support forces on prescribed ones
     PointMatrix g = external_force_;
     for (Index d = 0; d < 3 * n; ++d)
       if (!free[static_cast<std::size_t>(d)]) g.data()[d] = mass[d] * acceleration[d] - internal_force_.data()[d];
     return g;
   };
-  energy_internal_ = solid_->strain_energy(state_);
-  energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
-  const Real initial_total = energy_internal_ + energy_kinetic_;
-  energy_external_ = 0;
-  sink->output_point(0, 0.0, 0.0);
+  if (resumed_) {
+    forces(time_of(loop.step));  // the bond state and forces of the saved displacements (as computed then)
+  } else {
+    forces(0.0);
+    acceleration.resize(3 * n);
+    accelerate();
+    energy_internal_ = solid_->strain_energy(state_);
+    energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
+    loop.initial_total = energy_internal_ + energy_kinetic_;
+    energy_external_ = 0;
+    sink->output_point(0, 0.0, 0.0);
+    loop.support_force = support_force();  // the end-of-step value of the previous step
+  }
+  const Real initial_total = loop.initial_total;
   const auto loop_start = Clock::now();
-  PointMatrix g_old = support_force();  // the end-of-step value of the previous step
-  for (Index step = 1; step <= steps; ++step) {
-    const Real t = static_cast<Real>(step) * dt;
+  PointMatrix& g_old = loop.support_force;
+  for (Index step = loop.step + 1; step <= steps; ++step) {
+    const Real t = time_of(step);
     const Eigen::VectorXd u_old = u;
     // Stage 1: half-step velocity; Stage 2: positions; Stage 3: prescribed motion.
     for (Index d = 0; d < 3 * n; ++d)
@@ -436,6 +473,8 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
       sink->output_point(step, t, t / options.end_time);
       sink->progress(t / options.end_time, fmt::format("step {} t {:.4g} dt {:.3g}", step, t, dt));
     }
+    loop.step = step;
+    sink->safe_point();
   }
   timings_["explicit_loop_s"] = seconds_since(loop_start);
   timings_.erase("energy_error");
@@ -664,6 +703,107 @@ RunCounts PeridynamicAnalysis::counts() const {
   c.dofs = 3 * body_->nodes();
   c.steps = steps_;
   return c;
+}
+
+bool PeridynamicAnalysis::can_checkpoint() const {
+  return problem_.analysis == PdAnalysisKind::quasi_static || problem_.analysis == PdAnalysisKind::explicit_dynamics;
+}
+
+// The state after a completed increment / step; the bond state is recomputed from u on restore
+// (the same function of the same numbers, so the same bits).
+void PeridynamicAnalysis::save_state(StateWriter& out) const {
+  out.put("pd.analysis", static_cast<int>(problem_.analysis));
+  out.put("pd.nodes", body_->nodes());
+  out.put("pd.bonds", body_->bonds());
+  out.put_matrix("pd.displacement", u_);
+  out.put_matrix("pd.velocity", velocity_);
+  out.put_matrix("pd.internal_force", internal_force_);
+  out.put_matrix("pd.external_force", external_force_);
+  out.put("pd.energy_internal", energy_internal_);
+  out.put("pd.energy_kinetic", energy_kinetic_);
+  out.put("pd.energy_external", energy_external_);
+  out.put("pd.energy_damping", energy_damping_);
+  out.put("pd.energy_error", energy_error_);
+  out.put("pd.last_residual", last_residual_);
+  out.put("pd.last_iterations", last_iterations_);
+  out.put("pd.steps", steps_);
+  if (problem_.analysis == PdAnalysisKind::quasi_static) {
+    out.put("pd.increment_iterations", increment_iterations_);
+    out.put("pd.path_load", path_load_);
+    out.put("pd.path_displacement", path_displacement_);
+    out.put("pd.total_iterations", static_cast<std::int64_t>(total_iterations_));
+    out.put("pd.qs.step", quasi_.step);
+    out.put("pd.qs.factor", quasi_.factor);
+    out.put("pd.qs.previous_factor", quasi_.previous_factor);
+    out.put_matrix("pd.qs.previous", quasi_.previous);
+    out.put_matrix("pd.qs.before_previous", quasi_.before_previous);
+    out.put_matrix("pd.qs.generalized_force", quasi_.generalized_force);
+    out.put("pd.qs.have_two", quasi_.have_two);
+    out.put("pd.qs.cuts", quasi_.cuts);
+    out.put("pd.qs.increment", quasi_.increment);
+  } else {
+    out.put("pd.explicit.step", explicit_.step);
+    out.put("pd.explicit.time_step", explicit_.time_step);
+    out.put("pd.explicit.origin_step", explicit_.origin_step);
+    out.put("pd.explicit.origin_time", explicit_.origin_time);
+    out.put("pd.explicit.end_time", explicit_.end_time);
+    out.put("pd.explicit.initial_total", explicit_.initial_total);
+    out.put_matrix("pd.explicit.acceleration", explicit_.acceleration);
+    out.put_matrix("pd.explicit.support_force", explicit_.support_force);
+    if (timings_.count("energy_error")) out.put("pd.explicit.running_energy_error", timings_.at("energy_error"));
+  }
+}
+
+void PeridynamicAnalysis::restore_state(const StateReader& in) {
+  if (in.integer("pd.analysis") != static_cast<int>(problem_.analysis)) throw StateError("written by another pd.analysis");
+  if (in.integer("pd.nodes") != body_->nodes() || in.integer("pd.bonds") != body_->bonds())
+    throw StateError(fmt::format("written for {} nodes and {} bonds, this lattice has {} and {}", in.integer("pd.nodes"),
+                                 in.integer("pd.bonds"), body_->nodes(), body_->bonds()));
+  in.matrix_into("pd.displacement", u_);
+  in.matrix_into("pd.velocity", velocity_);
+  in.matrix_into("pd.internal_force", internal_force_);
+  in.matrix_into("pd.external_force", external_force_);
+  energy_internal_ = in.real("pd.energy_internal");
+  energy_kinetic_ = in.real("pd.energy_kinetic");
+  energy_external_ = in.real("pd.energy_external");
+  energy_damping_ = in.real("pd.energy_damping");
+  energy_error_ = in.real("pd.energy_error");
+  last_residual_ = in.real("pd.last_residual");
+  last_iterations_ = static_cast<int>(in.integer("pd.last_iterations"));
+  steps_ = in.integer("pd.steps");
+  const Index n = body_->nodes();
+  if (problem_.analysis == PdAnalysisKind::quasi_static) {
+    increment_iterations_ = in.ints("pd.increment_iterations");
+    path_load_ = in.reals("pd.path_load");
+    path_displacement_ = in.reals("pd.path_displacement");
+    total_iterations_ = in.integer("pd.total_iterations");
+    quasi_.step = in.real("pd.qs.step");
+    quasi_.factor = in.real("pd.qs.factor");
+    quasi_.previous_factor = in.real("pd.qs.previous_factor");
+    quasi_.previous.resize(3, n);
+    quasi_.before_previous.resize(3, n);
+    quasi_.generalized_force.resize(3, n);
+    in.matrix_into("pd.qs.previous", quasi_.previous);
+    in.matrix_into("pd.qs.before_previous", quasi_.before_previous);
+    in.matrix_into("pd.qs.generalized_force", quasi_.generalized_force);
+    quasi_.have_two = in.boolean("pd.qs.have_two");
+    quasi_.cuts = static_cast<int>(in.integer("pd.qs.cuts"));
+    quasi_.increment = in.integer("pd.qs.increment");
+    solid_->bond_state(u_, state_);
+  } else {
+    explicit_.step = in.integer("pd.explicit.step");
+    explicit_.time_step = in.real("pd.explicit.time_step");
+    explicit_.origin_step = in.integer("pd.explicit.origin_step");
+    explicit_.origin_time = in.real("pd.explicit.origin_time");
+    explicit_.end_time = in.real("pd.explicit.end_time");
+    explicit_.initial_total = in.real("pd.explicit.initial_total");
+    explicit_.acceleration.resize(3 * n);
+    explicit_.support_force.resize(3, n);
+    in.matrix_into("pd.explicit.acceleration", explicit_.acceleration);
+    in.matrix_into("pd.explicit.support_force", explicit_.support_force);
+    if (in.has("pd.explicit.running_energy_error")) timings_["energy_error"] = in.real("pd.explicit.running_energy_error");
+  }
+  resumed_ = true;
 }
 
 }  // namespace lamina::pd

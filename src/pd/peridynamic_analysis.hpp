@@ -39,6 +39,10 @@ class PeridynamicAnalysis : public Analysis {
   OutputFrame frame() const override;
   RunCounts counts() const override;
   std::map<std::string, Real> timings() const override { return timings_; }
+  /// quasi_static and explicit runs write checkpoints (after each increment / step).
+  bool can_checkpoint() const override;
+  void save_state(StateWriter& out) const override;
+  void restore_state(const StateReader& in) override;
 
   /// Runs without an output sink (tests).
   void solve();
@@ -96,6 +100,26 @@ class PeridynamicAnalysis : public Analysis {
   int last_iterations_ = 0;
   Index steps_ = 0;
   std::map<std::string, Real> timings_;
+
+  // The loop state between increments / steps (checkpointed with the fields above).
+  bool resumed_ = false;  // restore_state was called: run() continues from it
+  struct QuasiStaticLoop {
+    Real step = 0, factor = 0, previous_factor = 0;
+    PointMatrix previous, before_previous, generalized_force;
+    bool have_two = false;
+    int cuts = 0;
+    Index increment = 0;
+  } quasi_;
+  struct ExplicitLoop {
+    Index step = 0;                   // steps done
+    Real time_step = 0;               // dt of the run (end_time / steps)
+    Index origin_step = 0;            // t = origin_time + (step - origin_step) dt (a restart with a new end time
+    Real origin_time = 0;             //   re-divides the rest of the run)
+    Real end_time = 0;                // of the run that wrote the state
+    Real initial_total = 0;           // energy at t = 0
+    Eigen::VectorXd acceleration;     // at the end of the last step
+    PointMatrix support_force;        // generalized external force at the end of the last step
+  } explicit_;
 };
 
 }  // namespace lamina::pd
