@@ -79,6 +79,12 @@ StateReader::StateReader(std::vector<char> bytes) : bytes_(std::move(bytes)) {
   }
 }
 
+std::vector<std::string> StateReader::names() const {
+  std::vector<std::string> names;
+  for (const auto& [name, record] : records_) names.push_back(name);
+  return names;
+}
+
 const StateReader::Record& StateReader::find(const std::string& name, char kind) const {
   const auto it = records_.find(name);
   if (it == records_.end()) throw StateError(fmt::format("the checkpoint has no '{}'", name));

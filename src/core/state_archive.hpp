@@ -62,6 +62,7 @@ class StateReader {
   explicit StateReader(std::vector<char> bytes);
 
   bool has(const std::string& name) const { return records_.count(name) > 0; }
+  std::vector<std::string> names() const;
   Real real(const std::string& name) const;
   std::int64_t integer(const std::string& name) const;
   bool boolean(const std::string& name) const { return integer(name) != 0; }
