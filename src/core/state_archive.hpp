@@ -72,7 +72,8 @@ class StateReader {
   std::vector<int> ints(const std::string& name) const;
   /// A matrix of any shape.
   Eigen::MatrixXd matrix(const std::string& name) const;
-  /// Into a matrix whose shape the analysis already knows (fixed or current size): refused otherwise.
+  /// Into a matrix whose shape the analysis already knows (fixed or current size): refused otherwise,
+  /// and refused when a value is not finite (an analysis stops before its state goes non-finite).
   template <class Derived>
   void matrix_into(const std::string& name, Eigen::PlainObjectBase<Derived>& into) const {
     const Eigen::MatrixXd m = matrix(name);
@@ -81,6 +82,7 @@ class StateReader {
     const bool cols_fit = Derived::ColsAtCompileTime == Eigen::Dynamic ? m.cols() == into.cols() || into.size() == 0
                                                                        : m.cols() == Derived::ColsAtCompileTime;
     if (!rows_fit || !cols_fit) shape_error(name, m.rows(), m.cols(), into.rows(), into.cols());
+    if (!m.allFinite()) throw StateError("checkpoint record '" + name + "' holds a non-finite value");
     into = m;
   }
 

@@ -770,12 +770,24 @@ void MpmAnalysis::restore_state(const StateReader& in) {
   loop_.level_steps = in.integer("mpm.loop.level_steps");
   loop_.level_done = in.boolean("mpm.loop.level_done");
   loop_.next_output = static_cast<int>(in.integer("mpm.loop.next_output"));
+  const MpmOptions& o = problem_.options;
+  auto require = [](bool ok, const char* what) {
+    if (!ok) throw StateError(std::string("checkpoint value out of range: ") + what);
+  };
+  require(std::isfinite(time_) && time_ >= 0 && std::isfinite(dt_previous_) && dt_previous_ >= 0 && std::isfinite(dt_), "time");
+  require(steps_ >= 0 && loop_.level_steps >= 0, "step counts");
+  require(loop_.level >= 1 && loop_.level <= o.load_levels + 1, "quasi-static level");
+  require(loop_.next_output >= 1 && loop_.next_output <= o.output_points + 1, "next output point");
   if (loop_.level_done) {  // written after the level's output point: continue with the next level
     ++loop_.level;
     loop_.level_steps = 0;
     loop_.level_done = false;
   }
-  grid_.locate(x_);
+  try {
+    grid_.locate(x_);
+  } catch (const AnalysisError& e) {
+    throw StateError(std::string("checkpoint record 'mpm.x': ") + e.what());
+  }
   resumed_ = true;
 }
 

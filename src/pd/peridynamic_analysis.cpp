@@ -803,6 +803,19 @@ void PeridynamicAnalysis::restore_state(const StateReader& in) {
     in.matrix_into("pd.explicit.support_force", explicit_.support_force);
     if (in.has("pd.explicit.running_energy_error")) timings_["energy_error"] = in.real("pd.explicit.running_energy_error");
   }
+  auto require = [](bool ok, const char* what) {
+    if (!ok) throw StateError(std::string("checkpoint value out of range: ") + what);
+  };
+  require(steps_ >= 0, "step count");
+  if (problem_.analysis == PdAnalysisKind::quasi_static)
+    require(quasi_.step > 0 && quasi_.step <= 1 && quasi_.factor >= 0 && quasi_.factor <= 1 && quasi_.increment >= 0 &&
+                quasi_.cuts >= 0 && std::isfinite(quasi_.previous_factor),
+            "load-stepping state");
+  else
+    require(explicit_.step >= 0 && explicit_.origin_step >= 0 && explicit_.origin_step <= explicit_.step &&
+                explicit_.time_step > 0 && std::isfinite(explicit_.time_step) && std::isfinite(explicit_.origin_time) &&
+                explicit_.end_time > 0 && std::isfinite(explicit_.end_time),
+            "explicit step state");
   resumed_ = true;
 }
 
