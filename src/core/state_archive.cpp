@@ -67,6 +67,7 @@ StateReader::StateReader(std::vector<char> bytes) : bytes_(std::move(bytes)) {
     take(&r.cols, sizeof r.cols, "cols");
     if (r.kind != kReals && r.kind != kIntegers && r.kind != kText)
       throw StateError(fmt::format("record '{}' has an unknown kind", name));
+    if (r.kind != kReals && r.cols != 1) throw StateError(fmt::format("record '{}' has a bad shape", name));
     const std::uint64_t limit = bytes_.size() - at;
     if (r.cols != 0 && r.rows > limit / r.cols) throw StateError(fmt::format("record '{}' is larger than the file", name));
     const std::uint64_t count = r.rows * r.cols;

@@ -108,6 +108,27 @@ TEST(io_Checkpoint, DamageIsRefusedWithTheReason) {
   fs::remove_all(folder);
 }
 
+TEST(io_Checkpoint, MalformedRecordsAreRefused) {
+  // an integer record claiming 2^60 rows and 0 columns (found by checkpoint_reader_fuzzer: it read as
+  // 2^60 integers), a real record larger than the payload, an empty name
+  auto record = [](char kind, std::uint64_t rows, std::uint64_t cols, std::uint32_t name_length = 1) {
+    std::vector<char> b;
+    auto raw = [&](const void* p, std::size_t n) { b.insert(b.end(), static_cast<const char*>(p), static_cast<const char*>(p) + n); };
+    raw(&name_length, 4);
+    b.insert(b.end(), name_length, 'a');
+    raw(&kind, 1);
+    raw(&rows, 8);
+    raw(&cols, 8);
+    return b;
+  };
+  EXPECT_THROW(StateReader{record('i', std::uint64_t(1) << 60, 0)}, StateError);
+  EXPECT_THROW(StateReader{record('t', 5, 0)}, StateError);
+  EXPECT_THROW(StateReader{record('r', 1000, 1000)}, StateError);
+  EXPECT_THROW(StateReader{record('r', 1, 1, 0)}, StateError);
+  EXPECT_THROW(StateReader{record('x', 0, 1)}, StateError);
+  EXPECT_NO_THROW(StateReader{record('r', 0, 5)});  // an empty matrix is fine
+}
+
 TEST(io_Checkpoint, NewestTwoAreKeptAndKilledRunsAreSearched) {
   const fs::path root = fresh_folder("lamina_checkpoint_keep");
   const fs::path out = root / "out";
