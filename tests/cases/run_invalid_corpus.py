@@ -35,7 +35,11 @@ import time
 
 TIMEOUT_S = 10.0
 MIN_FILES = 40
-MEMORY_LIMIT = 4 << 30  # address-space limit of each lamina process (a runaway allocation fails fast)
+# Address-space limit of each lamina process (a runaway allocation fails fast). Override in bytes
+# with LAMINA_CORPUS_MEMORY_LIMIT; 0 = none (an AddressSanitizer build reserves terabytes of
+# address space for its shadow memory and cannot start under the limit; scripts/sanitize.sh
+# caps single allocations with ASAN_OPTIONS=max_allocation_size_mb instead).
+MEMORY_LIMIT = int(os.environ.get("LAMINA_CORPUS_MEMORY_LIMIT", 4 << 30))
 
 
 def parse_header(path):
@@ -64,10 +68,11 @@ def parse_header(path):
 
 
 def limit_resources():
-    try:
-        resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
-    except (ValueError, OSError):
-        pass
+    if MEMORY_LIMIT > 0:
+        try:
+            resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+        except (ValueError, OSError):
+            pass
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
 
