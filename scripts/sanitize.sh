@@ -5,6 +5,7 @@
 #                   `lamina validate --fast`;
 #   --quick:        the CI subset: only lamina, test_io and test_geometry are built; those two
 #                   test programs and the invalid-input corpus are run.
+# Both run the checkpoint / restart tests (tests/cases/restart).
 # Any sanitizer report fails the step it happens in (the sanitizers stop the program); the script
 # runs every step, prints a summary and exits 1 if one of them failed.
 #
@@ -128,6 +129,11 @@ run_tests() {  # every test program of the build (or the quick ones), one after 
 step "unit tests" run_tests
 
 step "invalid-input corpus" env LAMINA="$build/lamina" /usr/bin/python3 "$root/tests/cases/run_invalid_corpus.py" "$root/tests/cases/invalid"
+
+# checkpoint / restart (docs/restart.md): the checkpoint writer and reader, SIGKILL / SIGTERM and restart
+restart_out="$(mktemp -d "${TMPDIR:-/tmp}/lamina-sanitize-restart-XXXXXX")"
+step "checkpoint / restart" env LAMINA="$build/lamina" /usr/bin/python3 "$root/tests/cases/restart/run_restart_tests.py" \
+  "$root/tests/cases/restart" "$restart_out" && rm -rf "$restart_out"
 
 if [ "$quick" = 0 ]; then
   validation_out="$(mktemp -d "${TMPDIR:-/tmp}/lamina-sanitize-validate-XXXXXX")"
