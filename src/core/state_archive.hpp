@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "core/types.hpp"
@@ -45,6 +46,13 @@ class StateWriter {
     put_reals(name, m.data(), static_cast<std::size_t>(m.size()), static_cast<std::uint64_t>(m.rows()),
               static_cast<std::uint64_t>(m.cols()));
   }
+  /// One call for any stored type (an analysis lists its state once, for writing and reading alike).
+  template <class T>
+  void field(const std::string& name, const T& value) {
+    if constexpr (std::is_base_of_v<Eigen::EigenBase<T>, T>) put_matrix(name, value);
+    else if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) put(name, static_cast<std::int64_t>(value));
+    else put(name, value);
+  }
   const std::vector<char>& bytes() const { return bytes_; }
 
  private:
@@ -72,18 +80,27 @@ class StateReader {
   std::vector<int> ints(const std::string& name) const;
   /// A matrix of any shape.
   Eigen::MatrixXd matrix(const std::string& name) const;
-  /// Into a matrix whose shape the analysis already knows (fixed or current size): refused otherwise,
+  /// Into a matrix of the shape the analysis already has (set up before restoring): refused otherwise,
   /// and refused when a value is not finite (an analysis stops before its state goes non-finite).
   template <class Derived>
   void matrix_into(const std::string& name, Eigen::PlainObjectBase<Derived>& into) const {
     const Eigen::MatrixXd m = matrix(name);
-    const bool rows_fit = Derived::RowsAtCompileTime == Eigen::Dynamic ? m.rows() == into.rows() || into.size() == 0
-                                                                       : m.rows() == Derived::RowsAtCompileTime;
-    const bool cols_fit = Derived::ColsAtCompileTime == Eigen::Dynamic ? m.cols() == into.cols() || into.size() == 0
-                                                                       : m.cols() == Derived::ColsAtCompileTime;
+    const bool rows_fit = m.rows() == into.rows(), cols_fit = m.cols() == into.cols();
     if (!rows_fit || !cols_fit) shape_error(name, m.rows(), m.cols(), into.rows(), into.cols());
     if (!m.allFinite()) throw StateError("checkpoint record '" + name + "' holds a non-finite value");
     into = m;
+  }
+  /// The counterpart of StateWriter::field (matrices must have their size already).
+  template <class T>
+  void field(const std::string& name, T& value) const {
+    if constexpr (std::is_base_of_v<Eigen::EigenBase<T>, T>) matrix_into(name, value);
+    else if constexpr (std::is_same_v<T, Real>) value = real(name);
+    else if constexpr (std::is_same_v<T, bool>) value = boolean(name);
+    else if constexpr (std::is_same_v<T, std::string>) value = text(name);
+    else if constexpr (std::is_same_v<T, std::vector<Real>>) value = reals(name);
+    else if constexpr (std::is_same_v<T, std::vector<int>>) value = ints(name);
+    else if constexpr (std::is_integral_v<T>) value = static_cast<T>(integer(name));
+    else static_assert(sizeof(T) == 0, "no checkpoint record type for this field");
   }
 
  private:

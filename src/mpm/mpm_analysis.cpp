@@ -710,66 +710,53 @@ std::map<std::string, Real> MpmAnalysis::timings() const {
 }
 
 // The state after a step: node motion, element stresses and hourglass resultants, clocks and the
-// energy balance; the grid connectivity is rebuilt from the positions (a function of them alone).
+// energy balance, listed once for writing and reading; the grid connectivity is rebuilt from the
+// positions (a function of them alone).
+template <class Self, class Archive>
+void MpmAnalysis::state_fields(Self& self, Archive& a) {
+  a.field("mpm.x", self.x_);
+  a.field("mpm.v", self.v_);
+  a.field("mpm.vpos", self.vpos_);
+  a.field("mpm.omega", self.omega_);
+  a.field("mpm.stress", self.stress_);
+  a.field("mpm.hourglass", self.hourglass_);
+  a.field("mpm.thickness", self.thickness_);
+  a.field("mpm.element_length", self.element_length_);
+  a.field("mpm.time", self.time_);
+  a.field("mpm.dt", self.dt_);
+  a.field("mpm.dt_previous", self.dt_previous_);
+  a.field("mpm.residual_ratio", self.residual_ratio_);
+  a.field("mpm.kinetic_previous", self.kinetic_previous_);
+  a.field("mpm.current_load", self.current_load_);
+  a.field("mpm.steps", self.steps_);
+  a.field("mpm.dt_control", self.dt_control_);
+  a.field("mpm.unconverged_levels", self.unconverged_levels_);
+  a.field("mpm.level_residual", self.level_residual_);
+  auto& e = self.energy_;
+  a.field("mpm.energy.kinetic", e.kinetic);
+  a.field("mpm.energy.internal", e.internal);
+  a.field("mpm.energy.hourglass", e.hourglass);
+  a.field("mpm.energy.external", e.external);
+  a.field("mpm.energy.damping", e.damping);
+  a.field("mpm.energy.transfer", e.transfer);
+  a.field("mpm.energy.initial_kinetic", e.initial_kinetic);
+  a.field("mpm.loop.level", self.loop_.level);
+  a.field("mpm.loop.level_steps", self.loop_.level_steps);
+  a.field("mpm.loop.level_done", self.loop_.level_done);
+  a.field("mpm.loop.next_output", self.loop_.next_output);
+}
+
 void MpmAnalysis::save_state(StateWriter& out) const {
   out.put("mpm.nodes", static_cast<std::int64_t>(x_.cols()));
   out.put("mpm.elements", problem_.mesh.element_count());
-  out.put_matrix("mpm.x", x_);
-  out.put_matrix("mpm.v", v_);
-  out.put_matrix("mpm.vpos", vpos_);
-  out.put_matrix("mpm.omega", omega_);
-  out.put_matrix("mpm.stress", stress_);
-  out.put_matrix("mpm.hourglass", hourglass_);
-  out.put_matrix("mpm.thickness", thickness_);
-  out.put_matrix("mpm.element_length", element_length_);
-  out.put("mpm.time", time_);
-  out.put("mpm.dt", dt_);
-  out.put("mpm.dt_previous", dt_previous_);
-  out.put("mpm.residual_ratio", residual_ratio_);
-  out.put("mpm.kinetic_previous", kinetic_previous_);
-  out.put("mpm.current_load", current_load_);
-  out.put("mpm.steps", steps_);
-  out.put("mpm.dt_control", dt_control_);
-  out.put("mpm.unconverged_levels", unconverged_levels_);
-  out.put("mpm.level_residual", level_residual_);
-  out.put("mpm.energy", std::vector<Real>{energy_.kinetic, energy_.internal, energy_.hourglass, energy_.external,
-                                          energy_.damping, energy_.transfer, energy_.initial_kinetic});
-  out.put("mpm.loop.level", loop_.level);
-  out.put("mpm.loop.level_steps", loop_.level_steps);
-  out.put("mpm.loop.level_done", loop_.level_done);
-  out.put("mpm.loop.next_output", loop_.next_output);
+  state_fields(*this, out);
 }
 
 void MpmAnalysis::restore_state(const StateReader& in) {
   if (in.integer("mpm.nodes") != x_.cols() || in.integer("mpm.elements") != problem_.mesh.element_count())
     throw StateError(fmt::format("written for {} nodes and {} elements, this mesh has {} and {}", in.integer("mpm.nodes"),
                                  in.integer("mpm.elements"), x_.cols(), problem_.mesh.element_count()));
-  in.matrix_into("mpm.x", x_);
-  in.matrix_into("mpm.v", v_);
-  in.matrix_into("mpm.vpos", vpos_);
-  in.matrix_into("mpm.omega", omega_);
-  in.matrix_into("mpm.stress", stress_);
-  in.matrix_into("mpm.hourglass", hourglass_);
-  in.matrix_into("mpm.thickness", thickness_);
-  in.matrix_into("mpm.element_length", element_length_);
-  time_ = in.real("mpm.time");
-  dt_ = in.real("mpm.dt");
-  dt_previous_ = in.real("mpm.dt_previous");
-  residual_ratio_ = in.real("mpm.residual_ratio");
-  kinetic_previous_ = in.real("mpm.kinetic_previous");
-  current_load_ = in.real("mpm.current_load");
-  steps_ = in.integer("mpm.steps");
-  dt_control_ = in.text("mpm.dt_control");
-  unconverged_levels_ = in.ints("mpm.unconverged_levels");
-  level_residual_ = in.reals("mpm.level_residual");
-  const std::vector<Real> e = in.reals("mpm.energy");
-  if (e.size() != 7) throw StateError("checkpoint record 'mpm.energy' has another size");
-  energy_.kinetic = e[0], energy_.internal = e[1], energy_.hourglass = e[2], energy_.external = e[3];
-  energy_.damping = e[4], energy_.transfer = e[5], energy_.initial_kinetic = e[6];
-  loop_.level = static_cast<int>(in.integer("mpm.loop.level"));
-  loop_.level_steps = in.integer("mpm.loop.level_steps");
-  loop_.level_done = in.boolean("mpm.loop.level_done");
-  loop_.next_output = static_cast<int>(in.integer("mpm.loop.next_output"));
+  state_fields(*this, in);  // (every array has its size from the set-up)
   const MpmOptions& o = problem_.options;
   auto require = [](bool ok, const char* what) {
     if (!ok) throw StateError(std::string("checkpoint value out of range: ") + what);

@@ -143,6 +143,9 @@ class MpmAnalysis : public Analysis {
     int next_output = 1;
   } loop_;
   bool resumed_ = false;
+  /// The checkpointed fields, listed once for save_state and restore_state.
+  template <class Self, class Archive>
+  static void state_fields(Self& self, Archive& archive);
 };
 
 }  // namespace lamina::mpm

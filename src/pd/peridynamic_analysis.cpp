@@ -709,49 +709,58 @@ bool PeridynamicAnalysis::can_checkpoint() const {
   return problem_.analysis == PdAnalysisKind::quasi_static || problem_.analysis == PdAnalysisKind::explicit_dynamics;
 }
 
-// The state after a completed increment / step; the bond state is recomputed from u on restore
-// (the same function of the same numbers, so the same bits).
+// The state after a completed increment / step, listed once for writing and reading (Archive is a
+// StateWriter or a const StateReader); the bond state is recomputed from u on restore (the same
+// function of the same numbers, so the same bits).
+template <class Self, class Archive>
+void PeridynamicAnalysis::state_fields(Self& self, Archive& a) {
+  a.field("pd.displacement", self.u_);
+  a.field("pd.velocity", self.velocity_);
+  a.field("pd.internal_force", self.internal_force_);
+  a.field("pd.external_force", self.external_force_);
+  a.field("pd.energy_internal", self.energy_internal_);
+  a.field("pd.energy_kinetic", self.energy_kinetic_);
+  a.field("pd.energy_external", self.energy_external_);
+  a.field("pd.energy_damping", self.energy_damping_);
+  a.field("pd.energy_error", self.energy_error_);
+  a.field("pd.last_residual", self.last_residual_);
+  a.field("pd.last_iterations", self.last_iterations_);
+  a.field("pd.steps", self.steps_);
+  if (self.problem_.analysis == PdAnalysisKind::quasi_static) {
+    a.field("pd.increment_iterations", self.increment_iterations_);
+    a.field("pd.path_load", self.path_load_);
+    a.field("pd.path_displacement", self.path_displacement_);
+    a.field("pd.total_iterations", self.total_iterations_);
+    auto& q = self.quasi_;
+    a.field("pd.qs.step", q.step);
+    a.field("pd.qs.factor", q.factor);
+    a.field("pd.qs.previous_factor", q.previous_factor);
+    a.field("pd.qs.previous", q.previous);
+    a.field("pd.qs.before_previous", q.before_previous);
+    a.field("pd.qs.generalized_force", q.generalized_force);
+    a.field("pd.qs.have_two", q.have_two);
+    a.field("pd.qs.cuts", q.cuts);
+    a.field("pd.qs.increment", q.increment);
+  } else {
+    auto& e = self.explicit_;
+    a.field("pd.explicit.step", e.step);
+    a.field("pd.explicit.time_step", e.time_step);
+    a.field("pd.explicit.origin_step", e.origin_step);
+    a.field("pd.explicit.origin_time", e.origin_time);
+    a.field("pd.explicit.end_time", e.end_time);
+    a.field("pd.explicit.initial_total", e.initial_total);
+    a.field("pd.explicit.acceleration", e.acceleration);
+    a.field("pd.explicit.support_force", e.support_force);
+  }
+}
+
 void PeridynamicAnalysis::save_state(StateWriter& out) const {
   out.put("pd.analysis", static_cast<int>(problem_.analysis));
   out.put("pd.nodes", body_->nodes());
   out.put("pd.bonds", body_->bonds());
-  out.put_matrix("pd.displacement", u_);
-  out.put_matrix("pd.velocity", velocity_);
-  out.put_matrix("pd.internal_force", internal_force_);
-  out.put_matrix("pd.external_force", external_force_);
-  out.put("pd.energy_internal", energy_internal_);
-  out.put("pd.energy_kinetic", energy_kinetic_);
-  out.put("pd.energy_external", energy_external_);
-  out.put("pd.energy_damping", energy_damping_);
-  out.put("pd.energy_error", energy_error_);
-  out.put("pd.last_residual", last_residual_);
-  out.put("pd.last_iterations", last_iterations_);
-  out.put("pd.steps", steps_);
-  if (problem_.analysis == PdAnalysisKind::quasi_static) {
-    out.put("pd.increment_iterations", increment_iterations_);
-    out.put("pd.path_load", path_load_);
-    out.put("pd.path_displacement", path_displacement_);
-    out.put("pd.total_iterations", static_cast<std::int64_t>(total_iterations_));
-    out.put("pd.qs.step", quasi_.step);
-    out.put("pd.qs.factor", quasi_.factor);
-    out.put("pd.qs.previous_factor", quasi_.previous_factor);
-    out.put_matrix("pd.qs.previous", quasi_.previous);
-    out.put_matrix("pd.qs.before_previous", quasi_.before_previous);
-    out.put_matrix("pd.qs.generalized_force", quasi_.generalized_force);
-    out.put("pd.qs.have_two", quasi_.have_two);
-    out.put("pd.qs.cuts", quasi_.cuts);
-    out.put("pd.qs.increment", quasi_.increment);
-  } else {
-    out.put("pd.explicit.step", explicit_.step);
-    out.put("pd.explicit.time_step", explicit_.time_step);
-    out.put("pd.explicit.origin_step", explicit_.origin_step);
-    out.put("pd.explicit.origin_time", explicit_.origin_time);
-    out.put("pd.explicit.end_time", explicit_.end_time);
-    out.put("pd.explicit.initial_total", explicit_.initial_total);
-    out.put_matrix("pd.explicit.acceleration", explicit_.acceleration);
-    out.put_matrix("pd.explicit.support_force", explicit_.support_force);
-    if (timings_.count("energy_error")) out.put("pd.explicit.running_energy_error", timings_.at("energy_error"));
-  }
+  state_fields(*this, out);
+  if (problem_.analysis == PdAnalysisKind::explicit_dynamics)  // the energy error of the last output point
+    out.put("pd.explicit.energy_error_reported", timings_.count("energy_error") ? timings_.at("energy_error") : std::nan(""));
 }
 
 void PeridynamicAnalysis::restore_state(const StateReader& in) {
@@ -759,50 +768,17 @@ void PeridynamicAnalysis::restore_state(const StateReader& in) {
   if (in.integer("pd.nodes") != body_->nodes() || in.integer("pd.bonds") != body_->bonds())
     throw StateError(fmt::format("written for {} nodes and {} bonds, this lattice has {} and {}", in.integer("pd.nodes"),
                                  in.integer("pd.bonds"), body_->nodes(), body_->bonds()));
-  in.matrix_into("pd.displacement", u_);
-  in.matrix_into("pd.velocity", velocity_);
-  in.matrix_into("pd.internal_force", internal_force_);
-  in.matrix_into("pd.external_force", external_force_);
-  energy_internal_ = in.real("pd.energy_internal");
-  energy_kinetic_ = in.real("pd.energy_kinetic");
-  energy_external_ = in.real("pd.energy_external");
-  energy_damping_ = in.real("pd.energy_damping");
-  energy_error_ = in.real("pd.energy_error");
-  last_residual_ = in.real("pd.last_residual");
-  last_iterations_ = static_cast<int>(in.integer("pd.last_iterations"));
-  steps_ = in.integer("pd.steps");
-  const Index n = body_->nodes();
-  if (problem_.analysis == PdAnalysisKind::quasi_static) {
-    increment_iterations_ = in.ints("pd.increment_iterations");
-    path_load_ = in.reals("pd.path_load");
-    path_displacement_ = in.reals("pd.path_displacement");
-    total_iterations_ = in.integer("pd.total_iterations");
-    quasi_.step = in.real("pd.qs.step");
-    quasi_.factor = in.real("pd.qs.factor");
-    quasi_.previous_factor = in.real("pd.qs.previous_factor");
-    quasi_.previous.resize(3, n);
-    quasi_.before_previous.resize(3, n);
-    quasi_.generalized_force.resize(3, n);
-    in.matrix_into("pd.qs.previous", quasi_.previous);
-    in.matrix_into("pd.qs.before_previous", quasi_.before_previous);
-    in.matrix_into("pd.qs.generalized_force", quasi_.generalized_force);
-    quasi_.have_two = in.boolean("pd.qs.have_two");
-    quasi_.cuts = static_cast<int>(in.integer("pd.qs.cuts"));
-    quasi_.increment = in.integer("pd.qs.increment");
-    solid_->bond_state(u_, state_);
-  } else {
-    explicit_.step = in.integer("pd.explicit.step");
-    explicit_.time_step = in.real("pd.explicit.time_step");
-    explicit_.origin_step = in.integer("pd.explicit.origin_step");
-    explicit_.origin_time = in.real("pd.explicit.origin_time");
-    explicit_.end_time = in.real("pd.explicit.end_time");
-    explicit_.initial_total = in.real("pd.explicit.initial_total");
-    explicit_.acceleration.resize(3 * n);
-    explicit_.support_force.resize(3, n);
-    in.matrix_into("pd.explicit.acceleration", explicit_.acceleration);
-    in.matrix_into("pd.explicit.support_force", explicit_.support_force);
-    if (in.has("pd.explicit.running_energy_error")) timings_["energy_error"] = in.real("pd.explicit.running_energy_error");
-  }
+  const Index n = body_->nodes();  // the sizes the records must have
+  quasi_.previous.resize(3, n);
+  quasi_.before_previous.resize(3, n);
+  quasi_.generalized_force.resize(3, n);
+  explicit_.acceleration.resize(3 * n);
+  explicit_.support_force.resize(3, n);
+  state_fields(*this, in);
+  if (problem_.analysis == PdAnalysisKind::quasi_static) solid_->bond_state(u_, state_);
+  if (problem_.analysis == PdAnalysisKind::explicit_dynamics)
+    if (const Real reported = in.real("pd.explicit.energy_error_reported"); std::isfinite(reported))
+      timings_["energy_error"] = reported;
   auto require = [](bool ok, const char* what) {
     if (!ok) throw StateError(std::string("checkpoint value out of range: ") + what);
   };

@@ -120,6 +120,9 @@ class PeridynamicAnalysis : public Analysis {
     Eigen::VectorXd acceleration;     // at the end of the last step
     PointMatrix support_force;        // generalized external force at the end of the last step
   } explicit_;
+  /// The checkpointed fields, listed once for save_state and restore_state.
+  template <class Self, class Archive>
+  static void state_fields(Self& self, Archive& archive);
 };
 
 }  // namespace lamina::pd
