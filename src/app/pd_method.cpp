@@ -83,6 +83,9 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
                                : correction == "plate" ? pd::SurfaceCorrection::plate
                                                        : pd::SurfaceCorrection::none;
   o->body.partial_volume = section.boolean("partial_volume", false);
+  o->body.plate_model = section.word("plate_model", {"auto", "lattice"}, "auto") == "auto" ? pd::PlateModel::automatic
+                                                                                          : pd::PlateModel::lattice;
+  o->body.plate_stabilization = section.real("plate_stabilization", 0.25, 0.0, 100.0, true);
   io::NodeReader qs = section.child("quasi_static");
   if (qs.defined() && qs.expect_map()) {
     auto& r = o->relaxation;

@@ -8,7 +8,7 @@
 
 namespace lamina::pd {
 
-AdaptiveDynamicRelaxation::AdaptiveDynamicRelaxation(const LinearPeridynamicSolid& solid, Eigen::VectorXd fictitious_density,
+AdaptiveDynamicRelaxation::AdaptiveDynamicRelaxation(const PeridynamicModel& solid, Eigen::VectorXd fictitious_density,
                                                      std::vector<char> free, AdaptiveDynamicRelaxationOptions options)
     : solid_(solid), lambda_(std::move(fictitious_density)), free_(std::move(free)), options_(options) {}
 
@@ -19,13 +19,14 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
   const Eigen::Map<const Eigen::VectorXd> fext(external_force.data(), dofs);
   Eigen::VectorXd velocity = Eigen::VectorXd::Zero(dofs), previous_force(dofs), residual(dofs);
   RelaxationResult result;
+  result.state = solid_.make_state();
   const Real dt = 1.0;
   Real previous_kinetic = 0;
   bool restart = false;
   for (int k = 0;; ++k) {
     // Stage 1: internal force at U^k.
-    solid_.bond_state(u, result.state);
-    result.internal_force = solid_.internal_force(result.state);
+    solid_.update(u, *result.state);
+    result.internal_force = solid_.internal_force(*result.state);
     const Eigen::Map<const Eigen::VectorXd> fint(result.internal_force.data(), dofs);
     // Stage 2: residual on the free dofs and the convergence test (seed eq (8)).
     Real largest = 0, scale = 0;

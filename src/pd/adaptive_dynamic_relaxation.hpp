@@ -14,9 +14,10 @@
 // The energy dissipated by the fictitious damping, sum c lambda Udot^2 dt, is accumulated.
 // Extension (kinetic_fallback, default on): while c = 0 (negative local stiffness, e.g. during a
 // snap-through) the velocities are zeroed at every peak of the fictitious kinetic energy.
+#include <memory>
 #include <vector>
 
-#include "pd/linear_peridynamic_solid.hpp"
+#include "pd/peridynamic_model.hpp"
 #include "pd/peridynamic_problem.hpp"
 
 namespace lamina::pd {
@@ -27,14 +28,14 @@ struct RelaxationResult {
   Real initial_residual = 0;    // max |R^0|
   Real residual = 0;            // max |R| at the end
   Real damping_energy = 0;      // dissipated in this increment
-  BondState state;              // at the final U
+  std::unique_ptr<ModelState> state;  // at the final U
   PointMatrix internal_force;   // at the final U
 };
 
 class AdaptiveDynamicRelaxation {
  public:
   /// fictitious_density: lambda per dof (3N); free: 1 for unknown dofs, 0 for prescribed ones.
-  AdaptiveDynamicRelaxation(const LinearPeridynamicSolid& solid, Eigen::VectorXd fictitious_density,
+  AdaptiveDynamicRelaxation(const PeridynamicModel& solid, Eigen::VectorXd fictitious_density,
                             std::vector<char> free, AdaptiveDynamicRelaxationOptions options);
 
   /// Relax u (3 x N: prescribed values on constrained dofs, the start field elsewhere) to equilibrium
@@ -45,7 +46,7 @@ class AdaptiveDynamicRelaxation {
   RelaxationResult relax(PointMatrix& u, const PointMatrix& external_force, Real reference_residual = -1.0) const;
 
  private:
-  const LinearPeridynamicSolid& solid_;
+  const PeridynamicModel& solid_;
   Eigen::VectorXd lambda_;
   std::vector<char> free_;
   AdaptiveDynamicRelaxationOptions options_;

@@ -277,7 +277,7 @@ solve::SparseMatrix LinearPeridynamicSolid::stiffness(const BondState& s, bool m
   return K;
 }
 
-Eigen::VectorXd LinearPeridynamicSolid::absolute_row_sums(const solve::SparseMatrix& upper) {
+Eigen::VectorXd absolute_row_sums(const solve::SparseMatrix& upper) {
   Eigen::VectorXd sums = Eigen::VectorXd::Zero(upper.rows());
   for (Index col = 0; col < upper.outerSize(); ++col)
     for (solve::SparseMatrix::InnerIterator it(upper, col); it; ++it) {

@@ -12,12 +12,13 @@
 //   + sum_bonds P_ij (I - M M^T) / |Y| same pattern                   (geometric stiffness)
 // Forces are gathered per node over its own bond list (deterministic for any thread count).
 #include "pd/peridynamic_body.hpp"
+#include "pd/peridynamic_model.hpp"
 #include "solve/sparse_linear_solver.hpp"
 
 namespace lamina::pd {
 
 /// Bond kinematics and forces of one configuration.
-struct BondState {
+struct BondState : ModelState {
   Eigen::Matrix3Xd direction;     // M per directed bond
   Eigen::VectorXd length;         // |Y|
   Eigen::VectorXd extension;      // e
@@ -27,7 +28,7 @@ struct BondState {
   Eigen::VectorXd pair_force;     // P per directed bond (equal for b and reverse(b))
 };
 
-class LinearPeridynamicSolid {
+class LinearPeridynamicSolid : public PeridynamicModel {
  public:
   /// The body must be complete (calibrated): the solid caches its reverse-bond data.
   explicit LinearPeridynamicSolid(const PeridynamicBody& body);
@@ -49,7 +50,24 @@ class LinearPeridynamicSolid {
   solve::SparseMatrix stiffness(const BondState& state, bool material = true, bool geometric = true) const;
 
   /// Row sums of |K| of a symmetric matrix stored as its upper triangle.
-  static Eigen::VectorXd absolute_row_sums(const solve::SparseMatrix& upper);
+  static Eigen::VectorXd absolute_row_sums(const solve::SparseMatrix& upper) { return pd::absolute_row_sums(upper); }
+
+  // PeridynamicModel
+  std::string name() const override { return "lattice"; }
+  std::unique_ptr<ModelState> make_state() const override { return std::make_unique<BondState>(); }
+  void update(const PointMatrix& u, ModelState& state, bool linearised) const override {
+    bond_state(u, static_cast<BondState&>(state), linearised);
+  }
+  PointMatrix internal_force(const ModelState& state) const override {
+    return internal_force(static_cast<const BondState&>(state));
+  }
+  Real strain_energy(const ModelState& state) const override { return strain_energy(static_cast<const BondState&>(state)); }
+  solve::SparseMatrix stiffness(const ModelState& state, bool material, bool geometric) const override {
+    return stiffness(static_cast<const BondState&>(state), material, geometric);
+  }
+  Eigen::VectorXd nodal_dilatation(const ModelState& state) const override {
+    return static_cast<const BondState&>(state).dilatation.colwise().sum().transpose();
+  }
 
   const PeridynamicBody& body() const { return body_; }
 

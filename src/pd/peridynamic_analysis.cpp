@@ -2,15 +2,17 @@
 
 #include <fmt/format.h>
 
-#include <Spectra/MatOp/SparseCholesky.h>
+#include <Eigen/CholmodSupport>
 #include <Spectra/MatOp/SparseSymMatProd.h>
 #include <Spectra/SymGEigsSolver.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "core/error.hpp"
 #include "pd/load_path_events.hpp"
+#include "pd/peridynamic_plate.hpp"
 
 namespace lamina::pd {
 
@@ -35,6 +37,33 @@ solve::SparseMatrix reduce_upper(const solve::SparseMatrix& upper, const std::ve
   reduced.setFromTriplets(entries.begin(), entries.end());
   return reduced;
 }
+
+/// B-operator of Spectra's regular-inverse mode for B = K0 (symmetric positive definite, given by its
+/// upper triangle): CHOLMOD's supernodal Cholesky for y = B^-1 x, the symmetric product for y = B x.
+class CholmodRegularInverse {
+ public:
+  using Scalar = Real;
+  explicit CholmodRegularInverse(const solve::SparseMatrix& upper) : upper_(upper) {
+    llt_.compute(upper_);
+    ok_ = llt_.info() == Eigen::Success;
+  }
+  bool ok() const { return ok_; }
+  Index rows() const { return upper_.rows(); }
+  Index cols() const { return upper_.cols(); }
+  void solve(const Scalar* x_in, Scalar* y_out) const {
+    const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
+    Eigen::Map<Eigen::VectorXd>(y_out, rows()) = llt_.solve(x);
+  }
+  void perform_op(const Scalar* x_in, Scalar* y_out) const {
+    const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
+    Eigen::Map<Eigen::VectorXd>(y_out, rows()).noalias() = upper_.selfadjointView<Eigen::Upper>() * x;
+  }
+
+ private:
+  const solve::SparseMatrix& upper_;
+  Eigen::CholmodSupernodalLLT<solve::SparseMatrix, Eigen::Upper> llt_;
+  bool ok_ = false;
+};
 
 const std::vector<std::string> vector_components{"x", "y", "z", "magnitude"};
 const std::vector<std::string> tensor_components{"xx", "yy", "zz", "xy", "yz", "zx", "von_mises"};
@@ -100,14 +129,28 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
   velocity_ = PointMatrix::Zero(3, n);
   internal_force_ = PointMatrix::Zero(3, n);
   external_force_ = PointMatrix::Zero(3, n);
-  state_ = solid_->bond_state(u_);
+  state_ = model_->state_of(u_);
   timings_["setup_s"] = seconds_since(start);
 }
 
 void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
-  solid_.reset();
-  body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, problem_.body);
-  solid_ = std::make_unique<LinearPeridynamicSolid>(*body_);
+  model_.reset();
+  const BodyOptions& options = problem_.body;
+  std::optional<PlateColumns> columns;
+  if (options.plate_model == PlateModel::automatic && options.kinematics == Kinematics::three_dimensional &&
+      options.surface_correction != SurfaceCorrection::plate)
+    columns = find_plate_columns(problem_.positions, problem_.volumes, &model_reason_);
+  if (columns) {
+    // the node body only serves the strain probes (families, no calibration)
+    BodyOptions probe_options = options;
+    probe_options.surface_correction = SurfaceCorrection::none;
+    body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, probe_options);
+    model_ = std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+                                                problem_.young, problem_.poisson, options);
+  } else {
+    body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, options);
+    model_ = std::make_unique<LinearPeridynamicSolid>(*body_);
+  }
 }
 
 Real PeridynamicAnalysis::ramp(int index, Real factor) const {
@@ -155,7 +198,7 @@ void PeridynamicAnalysis::run(OutputSink& sink) {
 
 PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper) {
   const Index n = body_->nodes();
-  k0_upper = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
+  k0_upper = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
   const std::vector<char> free = free_dofs(true);
   std::vector<Index> map(free.size(), -1);
   Index count = 0;
@@ -182,10 +225,10 @@ void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {
   sink->output_point(0, 0.0, 0.0);
   solve::SparseMatrix k0;
   u_ = linear_solution(k0);
-  state_ = solid_->bond_state(u_, true);
-  internal_force_ = solid_->internal_force(state_);
+  state_ = model_->state_of(u_, true);
+  internal_force_ = model_->internal_force(*state_);
   external_force_ = external_force(1.0);
-  energy_internal_ = solid_->strain_energy(state_);
+  energy_internal_ = model_->strain_energy(*state_);
   // Clapeyron: 1/2 (f . u + reactions . prescribed displacements) = 1/2 sum (F_ext - F_int - F_ext) at constrained.
   const PointMatrix support = -(internal_force_ + external_force_);
   const std::vector<char> free = free_dofs(true);
@@ -212,8 +255,8 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
       linear_start.resize(0, 0);  // singular reference stiffness: fall back to the interpolated start
     }
   }
-  if (k0.rows() == 0) k0 = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
-  Eigen::VectorXd lambda = 0.25 * options.density_factor * LinearPeridynamicSolid::absolute_row_sums(k0);
+  if (k0.rows() == 0) k0 = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
+  Eigen::VectorXd lambda = 0.25 * options.density_factor * absolute_row_sums(k0);
   const std::vector<char> free = free_dofs(true);
   for (Index d = 0; d < lambda.size(); ++d)
     if (!(lambda[d] > 0)) {
@@ -221,7 +264,7 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
         throw AnalysisError(fmt::format("node {} has no stiffness in direction {} (isolated node?)", d / 3, d % 3));
       lambda[d] = 1.0;
     }
-  AdaptiveDynamicRelaxation relaxation(*solid_, lambda, free, options);
+  AdaptiveDynamicRelaxation relaxation(*model_, lambda, free, options);
   if (!resumed_) sink->output_point(0, 0.0, 0.0);
   // Start field of the first increment: inverse-distance interpolation of the prescribed values.
   auto interpolated_start = [&](Real factor) {
@@ -334,7 +377,7 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     state_ = std::move(result.state);
     internal_force_ = std::move(result.internal_force);
     external_force_ = fext;
-    energy_internal_ = solid_->strain_energy(state_);
+    energy_internal_ = model_->strain_energy(*state_);
     energy_damping_ += result.damping_energy;
     last_iterations_ = result.iterations;
     last_residual_ = result.residual;
@@ -365,8 +408,8 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
       throw AnalysisError(fmt::format(
           "explicit dynamics: the lattice ({} nodes, {} bonds) is too large to form the stiffness for the critical "
           "time step (~{:.1f} GB); give pd.explicit.time_step", n, body_->bonds(), k0_bytes / 1e9));
-    const solve::SparseMatrix k0 = solid_->stiffness(solid_->bond_state(PointMatrix::Zero(3, n), true), true, false);
-    const Eigen::VectorXd rows = LinearPeridynamicSolid::absolute_row_sums(k0);
+    const solve::SparseMatrix k0 = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
+    const Eigen::VectorXd rows = absolute_row_sums(k0);
     const Real omega_max = std::sqrt((rows.array() / mass.array()).maxCoeff());
     const Real critical = 2.0 / omega_max;
     if (options.time_step <= 0) dt = options.safety_factor * critical;
@@ -406,8 +449,8 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   }
   auto time_of = [&](Index step) { return loop.origin_time + static_cast<Real>(step - loop.origin_step) * dt; };
   auto forces = [&](Real t) {
-    solid_->bond_state(u_, state_);
-    internal_force_ = solid_->internal_force(state_);
+    model_->update(u_, *state_);
+    internal_force_ = model_->internal_force(*state_);
     external_force_ = external_force(t / options.end_time);
   };
   Eigen::VectorXd& acceleration = loop.acceleration;
@@ -427,7 +470,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     forces(0.0);
     acceleration.resize(3 * n);
     accelerate();
-    energy_internal_ = solid_->strain_energy(state_);
+    energy_internal_ = model_->strain_energy(*state_);
     energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
     loop.initial_total = energy_internal_ + energy_kinetic_;
     energy_external_ = 0;
@@ -465,7 +508,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     steps_ = step;
     if (step % every == 0 || step == steps) {
       // the strain energy (one more pass over the bonds) only where it is reported
-      energy_internal_ = solid_->strain_energy(state_);
+      energy_internal_ = model_->strain_energy(*state_);
       if (!std::isfinite(energy_internal_))
         throw AnalysisError(fmt::format("explicit dynamics: non-finite strain energy at step {} (t = {:.4g})", step, t));
       timings_["energy_error"] = (energy_internal_ + energy_kinetic_ - energy_external_ - initial_total) /
@@ -486,26 +529,26 @@ void PeridynamicAnalysis::buckling_modes(int count) {
   const Index n = body_->nodes();
   solve::SparseMatrix k0;
   const PointMatrix reference = linear_solution(k0);
-  const BondState reference_state = solid_->bond_state(reference, true);
-  const solve::SparseMatrix kg = solid_->stiffness(reference_state, false, true);
+  std::unique_ptr<ModelState> reference_state = model_->state_of(reference, true);
+  const solve::SparseMatrix kg = model_->stiffness(*reference_state, false, true);
   const std::vector<char> free = free_dofs(true);
   std::vector<Index> map(free.size(), -1);
   Index dofs = 0;
   for (std::size_t d = 0; d < free.size(); ++d)
     if (free[d]) map[d] = dofs++;
   const solve::SparseMatrix k_upper = reduce_upper(k0, map, dofs), g_upper = reduce_upper(kg, map, dofs);
-  const solve::SparseMatrix k_full = k_upper.selfadjointView<Eigen::Upper>();
-  const solve::SparseMatrix minus_g = -solve::SparseMatrix(g_upper.selfadjointView<Eigen::Upper>());
-  // K0 phi = lambda (-K_G) phi  <=>  (-K_G) phi = (1 / lambda) K0 phi: the largest 1/lambda first.
-  using OpType = Spectra::SparseSymMatProd<Real>;
-  using BOpType = Spectra::SparseCholesky<Real>;
+  const solve::SparseMatrix minus_g = -g_upper;
+  // K0 phi = lambda (-K_G) phi  <=>  (-K_G) phi = (1 / lambda) K0 phi: the largest 1/lambda first
+  // (regular-inverse mode: K0-orthogonal Lanczos with CHOLMOD solves of K0).
+  using OpType = Spectra::SparseSymMatProd<Real, Eigen::Upper>;
+  using BOpType = CholmodRegularInverse;
   OpType op(minus_g);
-  BOpType bop(k_full);
-  if (bop.info() != Spectra::CompInfo::Successful)
+  BOpType bop(k_upper);
+  if (!bop.ok())
     throw AnalysisError("buckling: the stiffness matrix is not positive definite (rigid-body motion left free?)");
   const int nev = std::min<int>(count, static_cast<int>(dofs) - 1);
   const int ncv = std::min<int>(std::max(2 * nev + 1, 40), static_cast<int>(dofs));
-  Spectra::SymGEigsSolver<OpType, BOpType, Spectra::GEigsMode::Cholesky> eigs(op, bop, nev, ncv);
+  Spectra::SymGEigsSolver<OpType, BOpType, Spectra::GEigsMode::RegularInverse> eigs(op, bop, nev, ncv);
   eigs.init();
   eigs.compute(Spectra::SortRule::LargestAlge, 2000, 1e-10);
   if (eigs.info() != Spectra::CompInfo::Successful) throw AnalysisError("buckling: the eigenvalue solver did not converge");
@@ -526,8 +569,8 @@ void PeridynamicAnalysis::buckling_modes(int count) {
     modes_.push_back(mode * (sign / largest));
   }
   u_ = reference;
-  state_ = reference_state;
-  internal_force_ = solid_->internal_force(state_);
+  state_ = std::move(reference_state);
+  internal_force_ = model_->internal_force(*state_);
   external_force_ = external_force(1.0);
 }
 
@@ -690,7 +733,7 @@ OutputFrame PeridynamicAnalysis::frame() const {
   vector_field("displacement", u_);
   vector_field("velocity", velocity_);
   vector_field("internal_force", internal_force_);
-  const Eigen::VectorXd total_dilatation = state_.dilatation.colwise().sum().transpose();
+  const Eigen::VectorXd total_dilatation = model_->nodal_dilatation(*state_);
   PointField dilatation{"dilatation", 1, std::vector<Real>(total_dilatation.data(), total_dilatation.data() + n)};
   f.point_fields.push_back(std::move(dilatation));
   for (std::size_t k = 0; k < modes_.size(); ++k) vector_field(fmt::format("mode_{}", k + 1), modes_[k]);
@@ -775,7 +818,7 @@ void PeridynamicAnalysis::restore_state(const StateReader& in) {
   explicit_.acceleration.resize(3 * n);
   explicit_.support_force.resize(3, n);
   state_fields(*this, in);
-  if (problem_.analysis == PdAnalysisKind::quasi_static) solid_->bond_state(u_, state_);
+  if (problem_.analysis == PdAnalysisKind::quasi_static) model_->update(u_, *state_);
   if (problem_.analysis == PdAnalysisKind::explicit_dynamics)
     if (const Real reported = in.real("pd.explicit.energy_error_reported"); std::isfinite(reported))
       timings_["energy_error"] = reported;

@@ -48,7 +48,7 @@ class PeridynamicAnalysis : public Analysis {
   void solve();
 
   const PeridynamicBody& body() const { return *body_; }
-  const LinearPeridynamicSolid& solid() const { return *solid_; }
+  const PeridynamicModel& model() const { return *model_; }
   const PointMatrix& displacement() const { return u_; }
   const PointMatrix& internal_force() const { return internal_force_; }
   Vec3 reaction(const IndexList& nodes) const;
@@ -85,9 +85,9 @@ class PeridynamicAnalysis : public Analysis {
   PeridynamicProblem problem_;
   std::vector<Probe> probes_;
   std::unique_ptr<PeridynamicBody> body_;
-  std::unique_ptr<LinearPeridynamicSolid> solid_;
+  std::unique_ptr<PeridynamicModel> model_;  // the lattice solid, or the plate model of a plate lattice
   PointMatrix u_, velocity_, internal_force_, external_force_;
-  BondState state_;
+  std::unique_ptr<ModelState> state_;
   std::vector<Real> eigenvalues_;
   std::vector<PointMatrix> modes_;
   std::vector<int> increment_iterations_;
@@ -100,6 +100,7 @@ class PeridynamicAnalysis : public Analysis {
   int last_iterations_ = 0;
   Index steps_ = 0;
   std::map<std::string, Real> timings_;
+  std::string model_reason_;  // why a 3D body is not a plate lattice (the lattice model applies)
 
   // The loop state between increments / steps (checkpointed with the fields above).
   bool resumed_ = false;  // restore_state was called: run() continues from it

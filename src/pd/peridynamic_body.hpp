@@ -39,6 +39,9 @@ namespace lamina::pd {
 enum class Influence { one, inverse_distance };            // omega = 1 | delta / x
 enum class Kinematics { three_dimensional, plane_stress, plane_strain };
 enum class SurfaceCorrection { none, energy, plate };
+/// automatic: a 2-4 layer plate lattice (plate_columns.hpp) gets the director plate model
+/// (peridynamic_plate.hpp), any other body the lattice model; lattice: always the lattice model.
+enum class PlateModel { automatic, lattice };
 
 using Vec6 = Eigen::Matrix<Real, 6, 1>;
 using Mat6 = Eigen::Matrix<Real, 6, 6>;
@@ -51,6 +54,8 @@ struct BodyOptions {
   SurfaceCorrection surface_correction = SurfaceCorrection::energy;
   bool partial_volume = false;  // linear ramp of the neighbour volume over delta +- h/2
   Real cell_size = 0.0;         // h of the partial-volume ramp (default: cube root of the node volume)
+  PlateModel plate_model = PlateModel::automatic;
+  Real plate_stabilization = 0.25;  // plate model: non-affine stabilisation modulus / shear modulus
 };
 
 struct BodyStatistics {

@@ -1,0 +1,97 @@
+#pragma once
+// PeridynamicPlate: the director plate model of a 2-4 layer plate lattice (docs/pd.md, "The plate
+// model"): non-ordinary state-based (correspondence) membrane and bending over an in-plane family of
+// node columns, bond-based transverse shear, a plane-stress thickness stretch, and bond-level
+// stabilisation of the non-affine in-plane and director deformation (Silling 2017).
+//
+// Column c: mid-surface m_c and director a_c (plate_columns.hpp), d = a / |a|. Family of column i:
+// columns j within the horizon (in-plane, reference X), v_b = omega beta V_j, K_i = sum v xi xi^T,
+// B_b = K_i^-1 xi_b (xi: 2D reference bond).
+//   F_i = sum_b v_b (m_j - m_i) B_b^T,  D_i = sum_b v_b (d_j - d_i) B_b^T          (3 x 2 each)
+//   E = 1/2 (F^T F - A0),  kappa = sym(F^T D) - kappa0,  s = |a| - |a0|,  q = s + nu/(1-nu) tr E
+//   gamma_b = (m_j - m_i) . (d_i + d_j) / (2 L0_b) - gamma0_b          (transverse shear of bond b)
+//   z_b = P_i (m_j - m_i - F xi_b) - z0_b,  P_i = I - d_i d_i^T;   y_b = d_j - d_i - D xi_b - y0_b
+//   gamma_i = F^T d - gamma0   (transverse shear of the column, 2-vector)
+//   W_i = 1/2 E:C:E + 1/2 E q^2 + t^2/24 kappa:C:kappa + 5/12 mu |gamma_i|^2
+//         + 1/2 sum_b [k_b (|z_b|^2 + t^2/12 |y_b|^2) + g_b v_b gamma_b^2],   Pi = sum_i V_i W_i (+ layer residual)
+// C: plane stress; k_b = s mu v_b / (|xi_b|^2 sum v); g_b = s (5/6) mu (t / |xi_b|)^2 / (1/2 sum v),
+// s = plate_stabilization (default 0.25). The bond terms vanish for affine fields (gamma_b: for
+// quadratic w with linear d) and give the hourglass modes (zig-zag w, d) their stiffness.
+// Every measure is invariant under rigid rotation (geometrically exact kinematics); a homogeneous
+// membrane strain, curvature or transverse shear gives the classical plate energy at every column
+// (the non-affine parts vanish; shear exact for mirror-symmetric families).
+#include <memory>
+#include <vector>
+
+#include "pd/peridynamic_body.hpp"
+#include "pd/peridynamic_model.hpp"
+#include "pd/plate_columns.hpp"
+
+namespace lamina::pd {
+
+struct PlateState : ModelState {
+  PointMatrix m, a, d;              // per column (current)
+  Eigen::VectorXd a_norm;
+  PointMatrix residual;             // per node (3-4 layers)
+  Eigen::VectorXd energy;           // per column: V_i W_i
+  Eigen::Matrix3Xd membrane_stress; // per column: S11, S22, S12 (second Piola-Kirchhoff, thickness-coupled)
+  Eigen::VectorXd membrane_trace;   // per column: tr E
+  PointMatrix bond_m, bond_d, bond_dj;  // per bond: d Pi / d(m_j - m_i), d Pi / d(d_j - d_i), d Pi / d d_j direct
+  PointMatrix self_d, self_a;           // per column: direct d Pi / d d_i and d Pi / d a_i
+};
+
+struct PlateStatistics {
+  Real mean_family = 0, min_family = 0;
+  int fit_degree_min = 3;   // lowest polynomial degree of the column gradient fits (3: cubic everywhere)
+  Real thickness = 0;
+  int layers = 0;
+};
+
+class PeridynamicPlate : public PeridynamicModel {
+ public:
+  /// reference: the stress-free node positions (with any imperfection); lattice: the same nodes without
+  /// it (columns and families are built on it); per-node volume, E and nu.
+  PeridynamicPlate(PlateColumns columns, const PointMatrix& reference, const PointMatrix& lattice,
+                   const Eigen::VectorXd& volumes, const Eigen::VectorXd& young, const Eigen::VectorXd& poisson,
+                   const BodyOptions& options);
+
+  std::string name() const override { return "plate"; }
+  std::unique_ptr<ModelState> make_state() const override { return std::make_unique<PlateState>(); }
+  void update(const PointMatrix& u, ModelState& state, bool linearised) const override;
+  PointMatrix internal_force(const ModelState& state) const override;
+  Real strain_energy(const ModelState& state) const override;
+  solve::SparseMatrix stiffness(const ModelState& state, bool material, bool geometric) const override;
+  Eigen::VectorXd nodal_dilatation(const ModelState& state) const override;
+
+  const PlateColumns& columns() const { return columns_; }
+  const PeridynamicBody& family() const { return *family_; }
+  const PlateStatistics& statistics() const { return statistics_; }
+
+ private:
+  /// B_b of the bonds [b0, b1) of one column; returns the polynomial degree used.
+  int gradient_weights(Index b0, Index b1, Real horizon);
+
+  PlateColumns columns_;
+  std::unique_ptr<PeridynamicBody> family_;  // 2D families over the column centres (bond volumes, reverse bonds)
+  PointMatrix reference_;                    // node positions of the stress-free configuration
+  Index nodes_ = 0;
+  Real thickness_ = 0, bending_factor_ = 0;  // t, t^2 / 12
+  Real residual_modulus_ = 0;
+  Real membrane_factor_ = 1;                 // in-plane stabilisation / director stabilisation                // layer residual stiffness per volume (3-4 layers)
+  // per column
+  Eigen::VectorXd volume_, shear_modulus_, young_, poisson_, a0_norm_;
+  std::vector<Mat3> plane_stress_;           // C (Voigt, engineering shear)
+  Eigen::Matrix3Xd metric0_, curvature0_;    // A0 (11, 22, 12), kappa0 (11, 22, 2 x 12)
+  // per bond
+  Eigen::Matrix2Xd xi_, shape_b_;            // reference in-plane bond, B_b = K^-1 xi
+  Eigen::VectorXd v_, length0_, stabilizer_, bond_shear_, gamma0_;
+  Eigen::Matrix2Xd shear0_;                  // per column: F0^T d0
+  PointMatrix z0_, y0_;
+  // reference configuration: column mid-surface, director, F0 and D0 (3 x 2, column-major), layer residual
+  PointMatrix m0_, d0_, reference_residual_;
+  Eigen::Matrix<Real, 6, Eigen::Dynamic> f0_, dd0_;
+  Eigen::VectorXd layer_volume_;             // per node
+  PlateStatistics statistics_;
+};
+
+}  // namespace lamina::pd
