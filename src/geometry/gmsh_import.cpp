@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "core/error.hpp"
+#include "geometry/msh_precheck.hpp"
 
 namespace lamina::geometry {
 
@@ -54,6 +55,9 @@ ImportedMesh import_gmsh(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw InputError("geometry.file", "an existing Gmsh .msh file", "'" + path + "' (no such file)");
+  // libgmsh trusts the file's counts and node references (a wrong count can crash the process):
+  // a structural check first, every problem an InputError naming file:line:column.
+  precheck_msh_file(path, "geometry.file");
   ImportedMesh out;
   load_import_function()(&path, &out);
   return out;

@@ -15,6 +15,9 @@
 //   or "group<tag>" when unnamed; groups with the same name are merged. The shell's sets are
 //   the same sets restricted to the shell's nodes (renumbered), dropped when empty.
 // Errors (missing or unreadable file, no nodes) -> InputError at "geometry.file" naming the file.
+// Before Gmsh reads the file, precheck_msh_file (geometry/msh_precheck.hpp) checks its structure:
+// libgmsh 4.8 crashes on some malformed files (a too small node count, huge counts), which are
+// refused there with file:line:column.
 // The function initialises and finalises the Gmsh API itself (serialised by a mutex): do not
 // call it while the calling program has its own Gmsh session open.
 #include <string>
