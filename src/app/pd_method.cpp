@@ -31,6 +31,7 @@ struct PdMethodOptions : MethodOptions {
   pd::ExplicitOptions explicit_options;
   pd::BucklingOptions buckling;
   ImperfectionOptions imperfection;
+  bool check_zero_energy = true;
 };
 
 void read_imperfection(const io::NodeReader& r, ImperfectionOptions& o) {
@@ -86,6 +87,7 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
   o->body.plate_model = section.word("plate_model", {"auto", "lattice"}, "auto") == "auto" ? pd::PlateModel::automatic
                                                                                           : pd::PlateModel::lattice;
   o->body.plate_stabilization = section.real("plate_stabilization", 0.25, 0.0, 100.0, true);
+  o->check_zero_energy = section.boolean("zero_energy_check", true);
   io::NodeReader qs = section.child("quasi_static");
   if (qs.defined() && qs.expect_map()) {
     auto& r = o->relaxation;
@@ -180,6 +182,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   p.relaxation = o.relaxation;
   p.explicit_options = o.explicit_options;
   p.buckling = o.buckling;
+  p.check_zero_energy = o.check_zero_energy;
   if (!c.discretization.spacing) {
     problem_at(disc, ".spacing", "lattice cell sizes [dx, dy, dz] (method pd)", "nothing");
     throw InputError(problems);

@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "pd/load_path_events.hpp"
 #include "pd/peridynamic_plate.hpp"
+#include "pd/zero_energy_check.hpp"
 
 namespace lamina::pd {
 
@@ -196,9 +197,10 @@ void PeridynamicAnalysis::run(OutputSink& sink) {
   timings_["solve_s"] = seconds_since(start);
 }
 
-PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper) {
+PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper, bool check) {
   const Index n = body_->nodes();
   k0_upper = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
+  if (check) check_unloaded_stiffness(k0_upper);
   const std::vector<char> free = free_dofs(true);
   std::vector<Index> map(free.size(), -1);
   Index count = 0;
@@ -219,6 +221,33 @@ PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper) 
   for (std::size_t d = 0; d < free.size(); ++d)
     if (map[d] >= 0) u.data()[d] = x[map[d]];
   return u;
+}
+
+void PeridynamicAnalysis::check_unloaded_stiffness(const solve::SparseMatrix& k0_upper) {
+  if (!problem_.check_zero_energy) return;
+  const auto start = Clock::now();
+  const std::vector<char> free = free_dofs(true);
+  std::vector<Index> map(free.size(), -1), dofs;
+  for (std::size_t d = 0; d < free.size(); ++d)
+    if (free[d]) map[d] = static_cast<Index>(dofs.size()), dofs.push_back(static_cast<Index>(d));
+  const ZeroEnergyReport r = find_zero_energy_modes(reduce_upper(k0_upper, map, static_cast<Index>(dofs.size())), dofs,
+                                                    body_->positions());
+  timings_["zero_energy_check_s"] = seconds_since(start);
+  timings_["smallest_scaled_stiffness"] = r.smallest;
+  if (!r.singular) return;
+  const Vec3 x = r.node >= 0 ? Vec3(body_->positions().col(r.node)) : Vec3::Zero();
+  if (r.rigid)
+    throw InputError("boundary", "supports that hold every rigid-body motion of the body",
+                     fmt::format("a free rigid-body motion of the unloaded body (largest at the node at ({:.4g}, {:.4g}, {:.4g}))",
+                                 x.x(), x.y(), x.z()));
+  throw InputError(
+      "discretization.horizon", "a lattice and horizon whose unloaded stiffness has no zero-energy mode",
+      fmt::format("a zero-energy mode of the {} model (smallest density-scaled stiffness eigenvalue {:.2g}, largest at the node at "
+                  "({:.4g}, {:.4g}, {:.4g})): {}",
+                  model_->name(), r.smallest, x.x(), x.y(), x.z(),
+                  model_->name() == "plate"
+                      ? "give the horizon at least 1.4 in-plane spacings"
+                      : "use a horizon above the cell diagonal, or the plate model for a 2-4 layer plate (pd.plate_model: auto)"));
 }
 
 void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {
@@ -256,6 +285,7 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     }
   }
   if (k0.rows() == 0) k0 = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
+  if (!resumed_) check_unloaded_stiffness(k0);
   Eigen::VectorXd lambda = 0.25 * options.density_factor * absolute_row_sums(k0);
   const std::vector<char> free = free_dofs(true);
   for (Index d = 0; d < lambda.size(); ++d)
@@ -528,7 +558,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
 void PeridynamicAnalysis::buckling_modes(int count) {
   const Index n = body_->nodes();
   solve::SparseMatrix k0;
-  const PointMatrix reference = linear_solution(k0);
+  const PointMatrix reference = linear_solution(k0, true);
   std::unique_ptr<ModelState> reference_state = model_->state_of(reference, true);
   const solve::SparseMatrix kg = model_->stiffness(*reference_state, false, true);
   const std::vector<char> free = free_dofs(true);

@@ -76,7 +76,10 @@ class PeridynamicAnalysis : public Analysis {
   void run_explicit(OutputSink* sink);
   void run_buckling(OutputSink* sink);
   /// Linear static solution at load factor 1 (used by linear_static and buckling).
-  PointMatrix linear_solution(solve::SparseMatrix& k0_upper);
+  PointMatrix linear_solution(solve::SparseMatrix& k0_upper, bool check = false);
+  /// Refuses (InputError, exit 2) an unloaded stiffness with a zero-energy mode on the free dofs:
+  /// a rigid-body motion the supports leave free, or a spurious mode of the lattice / horizon.
+  void check_unloaded_stiffness(const solve::SparseMatrix& k0_upper);
   /// Buckling load factors and modes of the current body under the reference load.
   void buckling_modes(int count);
   Index nearest_node(const Vec3& x, const IndexList& candidates) const;

@@ -14,7 +14,7 @@
 //   gamma_i = F^T d - gamma0   (transverse shear of the column, 2-vector)
 //   W_i = 1/2 E:C:E + 1/2 E q^2 + t^2/24 kappa:C:kappa + 5/12 mu |gamma_i|^2
 //         + 1/2 sum_b [k_b (|z_b|^2 + t^2/12 |y_b|^2) + g_b v_b gamma_b^2],   Pi = sum_i V_i W_i (+ layer residual)
-// C: plane stress; k_b = s mu v_b / (|xi_b|^2 sum v); g_b = s (5/6) mu (t / |xi_b|)^2 / (1/2 sum v),
+// C: plane stress; k_b = s mu v_b / (|xi_b|^2 sum v) (4 k_b for z_b); g_b = s (5/6) mu (t / |xi_b|)^2 / (1/2 sum v),
 // s = plate_stabilization (default 0.25). The bond terms vanish for affine fields (gamma_b: for
 // quadratic w with linear d) and give the hourglass modes (zig-zag w, d) their stiffness.
 // Every measure is invariant under rigid rotation (geometrically exact kinematics); a homogeneous
@@ -77,7 +77,9 @@ class PeridynamicPlate : public PeridynamicModel {
   Index nodes_ = 0;
   Real thickness_ = 0, bending_factor_ = 0;  // t, t^2 / 12
   Real residual_modulus_ = 0;
-  Real membrane_factor_ = 1;                 // in-plane stabilisation / director stabilisation                // layer residual stiffness per volume (3-4 layers)
+  // in-plane stabilisation / director stabilisation: the in-plane one at the shear modulus (damps
+  // the boundary-layer ringing of a loaded edge; no effect on bending), the director one at s mu
+  Real membrane_factor_ = 4;                // layer residual stiffness per volume (3-4 layers)
   // per column
   Eigen::VectorXd volume_, shear_modulus_, young_, poisson_, a0_norm_;
   std::vector<Mat3> plane_stress_;           // C (Voigt, engineering shear)

@@ -81,6 +81,7 @@ struct PeridynamicProblem {
   ExplicitOptions explicit_options;
   BucklingOptions buckling;
   Imperfection imperfection;
+  bool check_zero_energy = true;    // quasi_static and buckling: refuse a stiffness with a zero-energy mode
 };
 
 }  // namespace lamina::pd

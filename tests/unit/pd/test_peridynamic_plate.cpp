@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "pd/cell_lattice.hpp"
+#include "core/error.hpp"
+#include "pd/peridynamic_analysis.hpp"
 #include "pd/peridynamic_plate.hpp"
 
 using namespace lamina;
@@ -143,5 +145,69 @@ TEST(PeridynamicPlate, OnlyRigidBodyZeroModes) {
     const Real largest = values.maxCoeff();
     EXPECT_LT(std::abs(values[5]), 1e-9 * largest) << factor;
     EXPECT_GT(values[6], 1e-9 * largest) << factor;
+  }
+}
+
+namespace {
+
+/// The simply supported 60 x 60 x 2 plate (5 mm cells, 2 layers) under equal and opposite edge
+/// forces, as a pd buckling problem.
+PeridynamicProblem square_buckling_problem(Real horizon, PlateModel model) {
+  PeridynamicProblem p;
+  const PointCloud cloud = lattice_point_cloud(make_cell_lattice(Vec3(0, 0, -1), Vec3(60, 60, 1), Vec3(5, 5, 1)), true);
+  const Index n = cloud.size();
+  p.positions = cloud.positions;
+  p.volumes = cloud.volumes;
+  p.young = Eigen::VectorXd::Constant(n, young);
+  p.poisson = Eigen::VectorXd::Constant(n, poisson);
+  p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
+  p.body.horizon = horizon;
+  p.body.plate_model = model;
+  p.analysis = PdAnalysisKind::buckling;
+  Index centre = 0, right = 0;
+  for (Index k = 0; k < n; ++k) {
+    const Vec3 x = cloud.positions.col(k);
+    if (x.x() < 3 || x.x() > 57 || x.y() < 3 || x.y() > 57) p.prescribed.push_back({k, 2, 0.0});
+    if (x.x() > 57) p.forces.push_back({k, Vec3(-1.0 / 24, 0, 0)});
+    if (x.x() < 3) p.forces.push_back({k, Vec3(1.0 / 24, 0, 0)});
+    if ((x - Vec3(27.5, 27.5, -0.5)).norm() < 1e-9) centre = k;
+    if ((x - Vec3(57.5, 27.5, -0.5)).norm() < 1e-9) right = k;
+  }
+  p.prescribed.push_back({centre, 0, 0.0});
+  p.prescribed.push_back({centre, 1, 0.0});
+  p.prescribed.push_back({right, 1, 0.0});
+  return p;
+}
+
+}  // namespace
+
+// A lattice whose horizon reaches the nearest neighbours only has zero-energy shear modes: the
+// buckling analysis refuses it (InputError, exit 2) with the reason; the plate model of the same
+// lattice and horizon has none and runs.
+TEST(PeridynamicPlate, ZeroEnergyModeIsRefused) {
+  PeridynamicAnalysis lattice(square_buckling_problem(5.5, PlateModel::lattice), {});
+  try {
+    lattice.solve();
+    FAIL() << "a lattice with zero-energy modes was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("zero-energy mode of the lattice model"), std::string::npos) << e.what();
+  }
+  PeridynamicAnalysis plate(square_buckling_problem(5.5, PlateModel::automatic), {});
+  EXPECT_NO_THROW(plate.solve());
+  EXPECT_EQ(plate.model().name(), "plate");
+  ASSERT_FALSE(plate.eigenvalues().empty());
+  EXPECT_GT(plate.eigenvalues().front(), 0);
+}
+
+// Supports that leave a rigid motion free are named as such.
+TEST(PeridynamicPlate, FreeRigidMotionIsRefused) {
+  PeridynamicProblem p = square_buckling_problem(10, PlateModel::automatic);
+  p.prescribed.resize(p.prescribed.size() - 1);  // the in-plane rotation is free
+  PeridynamicAnalysis analysis(std::move(p), {});
+  try {
+    analysis.solve();
+    FAIL() << "a free rigid-body motion was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("free rigid-body motion"), std::string::npos) << e.what();
   }
 }
