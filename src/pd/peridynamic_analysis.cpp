@@ -675,9 +675,12 @@ Real PeridynamicAnalysis::probe(const Probe& p) const {
   }
   // strain / stress at the nearest node
   const Index i = p.at ? nearest_node(*p.at, p.nodes) : p.nodes.front();
-  Mat3 g;
-  strain_gradient_at(i, g);
-  const Mat3 eps = 0.5 * (g + g.transpose());
+  Mat3 eps;
+  if (!state_ || !model_->node_strain(*state_, i, eps)) {
+    Mat3 g;
+    strain_gradient_at(i, g);
+    eps = 0.5 * (g + g.transpose());
+  }
   const std::map<std::string, std::pair<int, int>> index{{"xx", {0, 0}}, {"yy", {1, 1}}, {"zz", {2, 2}},
                                                           {"xy", {0, 1}}, {"yz", {1, 2}}, {"zx", {2, 0}}};
   if (p.field == "strain") {

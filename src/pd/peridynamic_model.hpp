@@ -33,6 +33,10 @@ class PeridynamicModel {
   virtual solve::SparseMatrix stiffness(const ModelState& state, bool material, bool geometric) const = 0;
   /// A volumetric strain measure per node (output field `dilatation`).
   virtual Eigen::VectorXd nodal_dilatation(const ModelState& state) const = 0;
+  /// The small-strain tensor at a node when the model defines one (the plate model: membrane strain
+  /// plus height x curvature, thickness stretch, transverse shear); false: the analysis estimates it
+  /// from the displacements of the node's family.
+  virtual bool node_strain(const ModelState& /*state*/, Index /*node*/, Mat3& /*strain*/) const { return false; }
 
   std::unique_ptr<ModelState> state_of(const PointMatrix& u, bool linearised = false) const {
     auto s = make_state();

@@ -202,6 +202,9 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
   s.energy.resize(nc);
   s.membrane_stress.resize(3, nc);
   s.membrane_trace.resize(nc);
+  s.membrane_strain.resize(3, nc);
+  s.curvature.resize(3, nc);
+  s.shear.resize(2, nc);
   s.bond_m.resize(3, nb);
   s.bond_d.resize(3, nb);
   s.bond_dj.resize(3, nb);
@@ -311,6 +314,9 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
     s.energy[i] = volume_[i] * w;
     s.membrane_stress.col(i) = sigma;
     s.membrane_trace[i] = e[0] + e[1];
+    s.membrane_strain.col(i) = e;
+    s.curvature.col(i) = k;
+    s.shear.col(i) = gamma_c;
   }
 }
 
@@ -557,6 +563,21 @@ Real PeridynamicPlate::strain_energy(const ModelState& state) const {
   if (columns_.layers > 2)
     for (Index k = 0; k < nodes_; ++k) w += 0.5 * residual_modulus_ * layer_volume_[k] * s.residual.col(k).squaredNorm();
   return w;
+}
+
+bool PeridynamicPlate::node_strain(const ModelState& state, Index node, Mat3& strain) const {
+  const PlateState& s = static_cast<const PlateState&>(state);
+  const Index c = columns_.column_of[node];
+  if (c < 0 || s.membrane_strain.cols() != columns_.columns()) return false;
+  const Real z = columns_.zeta[node];
+  const Vec3 e = s.membrane_strain.col(c) + z * s.curvature.col(c);
+  // thickness strain: the plane-stress value at this height (sigma_zz = 0 through the thickness), plus
+  // the director's residual q (zero in equilibrium)
+  const Real alpha = poisson_[c] / (1 - poisson_[c]);
+  const Real q = s.a_norm[c] - a0_norm_[c] + alpha * s.membrane_trace[c];
+  strain << e[0], 0.5 * e[2], 0.5 * s.shear(0, c), 0.5 * e[2], e[1], 0.5 * s.shear(1, c), 0.5 * s.shear(0, c),
+      0.5 * s.shear(1, c), q - alpha * (e[0] + e[1]);
+  return true;
 }
 
 Eigen::VectorXd PeridynamicPlate::nodal_dilatation(const ModelState& state) const {

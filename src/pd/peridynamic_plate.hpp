@@ -36,6 +36,8 @@ struct PlateState : ModelState {
   Eigen::VectorXd energy;           // per column: V_i W_i
   Eigen::Matrix3Xd membrane_stress; // per column: S11, S22, S12 (second Piola-Kirchhoff, thickness-coupled)
   Eigen::VectorXd membrane_trace;   // per column: tr E
+  Eigen::Matrix3Xd membrane_strain, curvature;  // per column: E11, E22, 2 E12 and kappa11, kappa22, 2 kappa12
+  Eigen::Matrix2Xd shear;           // per column: gamma
   PointMatrix bond_m, bond_d, bond_dj;  // per bond: d Pi / d(m_j - m_i), d Pi / d(d_j - d_i), d Pi / d d_j direct
   PointMatrix self_d, self_a;           // per column: direct d Pi / d d_i and d Pi / d a_i
 };
@@ -62,6 +64,7 @@ class PeridynamicPlate : public PeridynamicModel {
   Real strain_energy(const ModelState& state) const override;
   solve::SparseMatrix stiffness(const ModelState& state, bool material, bool geometric) const override;
   Eigen::VectorXd nodal_dilatation(const ModelState& state) const override;
+  bool node_strain(const ModelState& state, Index node, Mat3& strain) const override;
 
   const PlateColumns& columns() const { return columns_; }
   const PeridynamicBody& family() const { return *family_; }
