@@ -211,3 +211,39 @@ TEST(PeridynamicPlate, FreeRigidMotionIsRefused) {
     EXPECT_NE(std::string(e.what()).find("free rigid-body motion"), std::string::npos) << e.what();
   }
 }
+
+// The unloaded stiffness of the supported plate is positive definite and bounded by the ADR
+// fictitious density of seed 002 eq (5): with lambda = 1/4 sum_j |K0_ij| the density-scaled
+// stiffness has its eigenvalues in (0, 4] (dt = 1 is stable).
+TEST(PeridynamicPlate, SupportedStiffnessPositiveAndBoundedByFictitiousDensity) {
+  for (Real factor : {1.4, 3.015}) {
+    PlateFixture f(40, 5, 2, 2, factor);
+    const Index n = f.cloud.size();
+    const solve::SparseMatrix k0 = f.plate->stiffness(*f.plate->state_of(PointMatrix::Zero(3, n)), true, false);
+    Eigen::MatrixXd k = Eigen::MatrixXd(Eigen::MatrixXd(k0).selfadjointView<Eigen::Upper>());
+    const Eigen::VectorXd lambda = 0.25 * absolute_row_sums(k0);
+    // supports: w = 0 on the outer columns, one in-plane pin and one roller (the rigid motions)
+    std::vector<Index> free;
+    Index pin = -1, roller = -1;
+    for (Index node = 0; node < n; ++node) {
+      const Vec3 x = f.cloud.positions.col(node);
+      if (pin < 0 && x.z() < 0 && std::abs(x.x() - 17.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) pin = node;
+      if (roller < 0 && x.z() < 0 && std::abs(x.x() - 37.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) roller = node;
+    }
+    for (Index node = 0; node < n; ++node) {
+      const Vec3 x = f.cloud.positions.col(node);
+      const bool edge = x.x() < 3 || x.x() > 37 || x.y() < 3 || x.y() > 37;
+      for (int a = 0; a < 3; ++a) {
+        if ((a == 2 && edge) || (node == pin && a < 2) || (node == roller && a == 1)) continue;
+        free.push_back(3 * node + a);
+      }
+    }
+    Eigen::MatrixXd scaled(free.size(), free.size());
+    for (std::size_t r = 0; r < free.size(); ++r)
+      for (std::size_t c = 0; c < free.size(); ++c)
+        scaled(r, c) = k(free[r], free[c]) / std::sqrt(lambda[free[r]] * lambda[free[c]]);
+    const Eigen::VectorXd values = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled).eigenvalues();
+    EXPECT_GT(values.minCoeff(), 1e-9) << factor;
+    EXPECT_LE(values.maxCoeff(), 4.0 + 1e-9) << factor;
+  }
+}
