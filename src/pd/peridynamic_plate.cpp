@@ -115,6 +115,9 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
   update(PointMatrix::Zero(3, nodes_), s, false);  // with zero reference corrections: the raw measures
   reference_residual_ = s.residual;
   a0_norm_ = s.a_norm;
+  length0_.resize(nb);
+  f0_.resize(6, nc);
+  dd0_.resize(6, nc);
   for (Index i = 0; i < nc; ++i) {
     Mat32 f = Mat32::Zero(), d = Mat32::Zero();
     for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b) {
@@ -122,6 +125,8 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
       f += v_[b] * (s.m.col(j) - s.m.col(i)) * shape_b_.col(b).transpose();
       d += v_[b] * (s.d.col(j) - s.d.col(i)) * shape_b_.col(b).transpose();
     }
+    f0_.col(i) = Eigen::Map<const Eigen::Matrix<Real, 6, 1>>(f.data());
+    dd0_.col(i) = Eigen::Map<const Eigen::Matrix<Real, 6, 1>>(d.data());
     const Eigen::Matrix2d ftf = f.transpose() * f, ftd = f.transpose() * d;
     metric0_.col(i) << ftf(0, 0), ftf(1, 1), ftf(0, 1);
     Eigen::Vector2d gamma_raw = Eigen::Vector2d::Zero();
@@ -136,7 +141,6 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
     for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b) {
       const Index j = fam.neighbour(b);
       const Vec3 dm = s.m.col(j) - s.m.col(i);
-      if (length0_.size() != nb) length0_.resize(nb);
       length0_[b] = dm.norm();
       gamma0_[b] = (0.5 * dm.dot(s.d.col(i) + s.d.col(j)) - gamma_raw.dot(xi_.col(b))) / xi_.col(b).norm();
       z0_.col(b) = p * (dm - f * xi_.col(b));
@@ -144,18 +148,6 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
     }
   }
   d0_ = s.d;
-  f0_.resize(6, nc);
-  dd0_.resize(6, nc);
-  for (Index i = 0; i < nc; ++i) {
-    Mat32 f = Mat32::Zero(), d = Mat32::Zero();
-    for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b) {
-      const Index j = fam.neighbour(b);
-      f += v_[b] * (s.m.col(j) - s.m.col(i)) * shape_b_.col(b).transpose();
-      d += v_[b] * (s.d.col(j) - s.d.col(i)) * shape_b_.col(b).transpose();
-    }
-    f0_.col(i) = Eigen::Map<const Eigen::Matrix<Real, 6, 1>>(f.data());
-    dd0_.col(i) = Eigen::Map<const Eigen::Matrix<Real, 6, 1>>(d.data());
-  }
   m0_ = s.m;
 }
 
