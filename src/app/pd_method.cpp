@@ -100,7 +100,14 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
     r.continuations = static_cast<int>(qs.integer("continuations", 4, 0, 1000));
     r.density_factor = qs.real("density_factor", 1.0, 0.0, 1e6, true);
     r.velocity_guard = qs.real("velocity_guard", 1e-10, 0.0, 1.0);
-    r.secant_predictor = qs.word("predictor", {"secant", "previous"}, "secant") == "secant";
+    const std::string predictor = qs.word("predictor", {"quadratic", "secant", "previous"}, "secant");
+    using Options = pd::AdaptiveDynamicRelaxationOptions;
+    r.predictor = predictor == "quadratic" ? Options::Predictor::quadratic
+                  : predictor == "secant"  ? Options::Predictor::secant
+                                           : Options::Predictor::previous;
+    r.damping_estimate = qs.word("damping_estimate", {"total", "increment"}, "increment") == "increment"
+                             ? Options::DampingEstimate::increment
+                             : Options::DampingEstimate::total;
     r.linear_start = qs.word("start", {"interpolated", "linear"}, "interpolated") == "linear";
     r.kinetic_fallback = qs.boolean("kinetic_fallback", true);
     qs.reject_unknown_keys();

@@ -23,6 +23,9 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
   const Real dt = 1.0;
   Real previous_kinetic = 0;
   bool restart = false;
+  // the displacement of the damping estimate: U (seed eq (6)) or U - U_start (damping_estimate: increment)
+  const bool incremental = options_.damping_estimate == AdaptiveDynamicRelaxationOptions::DampingEstimate::increment;
+  const Eigen::VectorXd start = incremental ? Eigen::VectorXd(U) : Eigen::VectorXd();
   for (int k = 0;; ++k) {
     // Stage 1: internal force at U^k.
     solid_.update(u, *result.state);
@@ -54,11 +57,12 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
       Real numerator = 0, denominator = 0;
       for (Index d = 0; d < dofs; ++d) {
         if (!free_[static_cast<std::size_t>(d)]) continue;
-        denominator += U[d] * U[d];
+        const Real ud = incremental ? U[d] - start[d] : U[d];
+        denominator += ud * ud;
         const Real v = velocity[d];
         if (v == 0 || std::abs(v) < options_.velocity_guard * std::abs(U[d])) continue;
         const Real local_stiffness = -(fint[d] - previous_force[d]) / (lambda_[d] * dt * v);
-        numerator += U[d] * local_stiffness * U[d];
+        numerator += ud * local_stiffness * ud;
       }
       if (denominator > 0 && numerator > 0) c = 2.0 * std::sqrt(numerator / denominator);
       if (c > 2.0) c = 1.9;

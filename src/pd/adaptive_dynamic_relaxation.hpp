@@ -5,7 +5,8 @@
 //   Lambda U'' + c Lambda U' = F(U) = F_int(U) + F_ext,   dt = 1
 //   lambda_ii = 1/4 dt^2 sum_j |K0_ij|                          (seed eq (5): Gershgorin bound of K0)
 //   1K_ii = -(F_i^n - F_i^(n-1)) / (lambda_ii dt Udot_i^(n-1/2)), 0 where |Udot_i| < guard |U_i|
-//   c^n = 2 sqrt(U^T 1K U / U^T U)   (0 if negative; 1.9 if above 2)           (seed eq (6))
+//   c^n = 2 sqrt(dU^T 1K dU / dU^T dU), dU = U - U_start (or U: seed eq (6), damping_estimate: total)
+//         (0 if negative; 1.9 if above 2)
 //   Udot^(n+1/2) = ((2 - c dt) Udot^(n-1/2) + 2 dt F^n / lambda) / (2 + c dt)  (seed eq (7))
 //   Udot^(1/2) = dt F^0 / (2 lambda)                                          (start-up half step)
 //   U^(n+1) = U^n + dt Udot^(n+1/2)

@@ -323,14 +323,16 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
   if (!resumed_) {
     quasi_ = QuasiStaticLoop{};
     quasi_.step = nominal;
-    quasi_.previous = quasi_.before_previous = PointMatrix::Zero(3, n);
+    quasi_.previous = quasi_.before_previous = quasi_.third = PointMatrix::Zero(3, n);
     quasi_.generalized_force = PointMatrix::Zero(3, n);  // F_ext on free dofs, support force on prescribed ones
     energy_damping_ = 0;
     energy_external_ = 0;
   }
   Real &step = quasi_.step, &factor = quasi_.factor, &previous_factor = quasi_.previous_factor;
-  PointMatrix &previous = quasi_.previous, &before_previous = quasi_.before_previous;
-  bool& have_two = quasi_.have_two;
+  PointMatrix &previous = quasi_.previous, &before_previous = quasi_.before_previous, &third = quasi_.third;
+  Real& third_factor = quasi_.third_factor;
+  bool &have_two = quasi_.have_two, &have_three = quasi_.have_three;
+  using Predictor = AdaptiveDynamicRelaxationOptions::Predictor;
   int& cuts = quasi_.cuts;
   Index& increment = quasi_.increment;
   PointMatrix& generalized_force = quasi_.generalized_force;
@@ -362,9 +364,16 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     PointMatrix u;
     if (factor == 0.0 && linear_start.size()) u = linear_start * target;
     else if (factor == 0.0) u = interpolated_start(target);
-    else if (options.secant_predictor && have_two)
+    else if (options.predictor == Predictor::quadratic && have_three) {
+      // Lagrange extrapolation through the last three converged states
+      const Real x0 = factor, x1 = previous_factor, x2 = third_factor;
+      const Real l0 = (target - x1) * (target - x2) / ((x0 - x1) * (x0 - x2));
+      const Real l1 = (target - x0) * (target - x2) / ((x1 - x0) * (x1 - x2));
+      const Real l2 = (target - x0) * (target - x1) / ((x2 - x0) * (x2 - x1));
+      u = l0 * previous + l1 * before_previous + l2 * third;
+    } else if (options.predictor != Predictor::previous && have_two)
       u = previous + (target - factor) / (factor - previous_factor) * (previous - before_previous);
-    else if (options.secant_predictor) u = previous * (target / factor);
+    else if (options.predictor != Predictor::previous) u = previous * (target / factor);
     else u = previous;
     apply_prescribed(u, target, false);
     // Stage 2: relax to equilibrium.
@@ -398,6 +407,9 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
       if (!free[static_cast<std::size_t>(d)]) new_generalized.data()[d] = -result.internal_force.data()[d] - fext.data()[d] + fext.data()[d];
     energy_external_ += 0.5 * ((generalized_force + new_generalized).array() * (u - previous).array()).sum();
     generalized_force = new_generalized;
+    have_three = have_two;
+    third = before_previous;
+    third_factor = previous_factor;
     before_previous = previous;
     have_two = factor > 0.0;
     previous_factor = factor;
@@ -815,6 +827,9 @@ void PeridynamicAnalysis::state_fields(Self& self, Archive& a) {
     a.field("pd.qs.before_previous", q.before_previous);
     a.field("pd.qs.generalized_force", q.generalized_force);
     a.field("pd.qs.have_two", q.have_two);
+    a.field("pd.qs.third", q.third);
+    a.field("pd.qs.third_factor", q.third_factor);
+    a.field("pd.qs.have_three", q.have_three);
     a.field("pd.qs.cuts", q.cuts);
     a.field("pd.qs.increment", q.increment);
   } else {
@@ -847,6 +862,7 @@ void PeridynamicAnalysis::restore_state(const StateReader& in) {
   const Index n = body_->nodes();  // the sizes the records must have
   quasi_.previous.resize(3, n);
   quasi_.before_previous.resize(3, n);
+  quasi_.third.resize(3, n);
   quasi_.generalized_force.resize(3, n);
   explicit_.acceleration.resize(3 * n);
   explicit_.support_force.resize(3, n);

@@ -109,8 +109,9 @@ class PeridynamicAnalysis : public Analysis {
   bool resumed_ = false;  // restore_state was called: run() continues from it
   struct QuasiStaticLoop {
     Real step = 0, factor = 0, previous_factor = 0;
-    PointMatrix previous, before_previous, generalized_force;
-    bool have_two = false;
+    Real third_factor = 0;               // the load factor of `third`
+    PointMatrix previous, before_previous, third, generalized_force;  // converged fields at factor, previous_factor, third_factor
+    bool have_two = false, have_three = false;
     int cuts = 0;
     Index increment = 0;
   } quasi_;

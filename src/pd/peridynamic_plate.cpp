@@ -111,6 +111,17 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
   gamma0_.setZero(nb);
   z0_.setZero(3, nb);
   y0_.setZero(3, nb);
+  bond_constants_.resize(static_cast<std::size_t>(nb));
+  for (Index b = 0; b < nb; ++b) {
+    BondConstants& k = bond_constants_[static_cast<std::size_t>(b)];
+    k.weighted_shape = v_[b] * shape_b_.col(b);
+    k.xi = xi_.col(b);
+    k.inverse_length = 1.0 / xi_.col(b).norm();
+    k.membrane = membrane_factor_ * stabilizer_[b];
+    k.director = bending_factor_ * stabilizer_[b];
+    k.shear = bond_shear_[b] * v_[b];
+    k.neighbour = fam.neighbour(b);
+  }
   PlateState s;
   update(PointMatrix::Zero(3, nodes_), s, false);  // with zero reference corrections: the raw measures
   reference_residual_ = s.residual;
@@ -222,93 +233,105 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
         if (reference_residual_.cols() == nodes_) s.residual.col(k) -= reference_residual_.col(k);
       }
   }
-#pragma omp parallel for schedule(dynamic, 64)
-  for (Index i = 0; i < nc; ++i) {
-    const Index b0 = fam.first_bond(i), b1 = fam.end_bond(i);
-    const Vec3 mi = s.m.col(i), di = s.d.col(i);
-    Mat32 f = Mat32::Zero(), d = Mat32::Zero();
-    for (Index b = b0; b < b1; ++b) {
-      const Index j = fam.neighbour(b);
-      f += v_[b] * (s.m.col(j) - mi) * shape_b_.col(b).transpose();
-      d += v_[b] * (s.d.col(j) - di) * shape_b_.col(b).transpose();
+  // Per column: the bond vectors are read once into a per-thread scratch (m_j - m_i, d_j, s_b, eta_b).
+  struct BondScratch {
+    Vec3 dm, dj;
+    Real shear = 0, eta = 0;
+  };
+#pragma omp parallel
+  {
+    std::vector<BondScratch> scratch;
+#pragma omp for schedule(dynamic, 64)
+    for (Index i = 0; i < nc; ++i) {
+      const Index b0 = fam.first_bond(i), b1 = fam.end_bond(i);
+      scratch.resize(static_cast<std::size_t>(b1 - b0));
+      const BondConstants* bc = bond_constants_.data() + b0;
+      BondScratch* bs = scratch.data();
+      const Index nf = b1 - b0;
+      const Vec3 mi = s.m.col(i), di = s.d.col(i);
+      Mat32 f = Mat32::Zero(), d = Mat32::Zero();
+      // transverse shear: bond measures s_b = (m_j - m_i) . (d_i + d_j) / 2 (exact zero for quadratic w
+      // with linear d), the column shear gamma = sum_b v_b s_b B_b - gamma0 (their fit: exact for uniform
+      // shear and pure bending on any family) and the non-affine bond parts eta_b = (s_b - gamma_raw . xi_b) / |xi_b|
+      Eigen::Vector2d gamma_raw = Eigen::Vector2d::Zero();
+      for (Index t = 0; t < nf; ++t) {
+        const Index j = bc[t].neighbour;
+        const Vec3 dm = s.m.col(j) - mi, dj = s.d.col(j);
+        f += dm * bc[t].weighted_shape.transpose();
+        d += (dj - di) * bc[t].weighted_shape.transpose();
+        const Real sb = 0.5 * dm.dot(di + dj);
+        gamma_raw += sb * bc[t].weighted_shape;
+        bs[t].dm = dm;
+        bs[t].dj = dj;
+        bs[t].shear = sb;
+      }
+      const Eigen::Matrix2d ftf = f.transpose() * f, ftd = f.transpose() * d;
+      const Vec3 e(0.5 * (ftf(0, 0) - metric0_(0, i)), 0.5 * (ftf(1, 1) - metric0_(1, i)), ftf(0, 1) - metric0_(2, i));
+      const Vec3 k = Vec3(ftd(0, 0), ftd(1, 1), ftd(0, 1) + ftd(1, 0)) - curvature0_.col(i);
+      const Real nu = poisson_[i], alpha = nu / (1 - nu), et = young_[i];
+      const Real q = s.a_norm[i] - a0_norm_[i] + alpha * (e[0] + e[1]);
+      const Mat3& cps = plane_stress_[static_cast<std::size_t>(i)];
+      const Vec3 ce = cps * e, ck = bending_factor_ * (cps * k);
+      const Vec3 sigma = ce + Vec3(et * q * alpha, et * q * alpha, 0);
+      Real w = 0.5 * e.dot(ce) + 0.5 * et * q * q + 0.5 * k.dot(ck);
+      Eigen::Matrix2d S, M;
+      S << sigma[0], sigma[2], sigma[2], sigma[1];
+      M << ck[0], ck[2], ck[2], ck[1];
+      Mat32 pf = f * S + d * M, pd = f * M;
+      const Eigen::Vector2d gamma_c = gamma_raw - shear0_.col(i);
+      const Eigen::Vector2d tau = shear_modulus_[i] * gamma_c;
+      w += 0.5 * tau.dot(gamma_c);
+      Eigen::Vector2d lambda = Eigen::Vector2d::Zero();
+      for (Index t = 0; t < nf; ++t) {
+        const Real eta = (bs[t].shear - gamma_raw.dot(bc[t].xi)) * bc[t].inverse_length - gamma0_[b0 + t];
+        bs[t].eta = eta;
+        w += 0.5 * bc[t].shear * eta * eta;
+        lambda += bc[t].shear * eta * bc[t].inverse_length * bc[t].xi;
+      }
+      const Eigen::Vector2d tau_lambda = tau - lambda;
+      Vec3 self_d = Vec3::Zero();
+      for (Index t = 0; t < nf; ++t) {
+        const Index b = b0 + t;
+        const Vec3& dm = bs[t].dm;
+        const Vec3& dj = bs[t].dj;
+        // d W / d s_b, then s_b's dependence on m_j - m_i, d_i and d_j
+        const Real sigma_b = bc[t].weighted_shape.dot(tau_lambda) + bc[t].shear * bs[t].eta * bc[t].inverse_length;
+        Vec3 force_m = (0.5 * sigma_b) * (di + dj);
+        self_d += (0.5 * sigma_b) * dm;
+        s.bond_dj.col(b) = (volume_[i] * 0.5 * sigma_b) * dm;
+        // in-plane non-affine stabilisation (tangent projection P = I - d d^T)
+        const Vec3 z_raw = dm - f * bc[t].xi;
+        const Real dz = di.dot(z_raw);
+        const Vec3 zeta = z_raw - dz * di - z0_.col(b);
+        const Real kb = bc[t].membrane;
+        const Real dzeta = zeta.dot(di);
+        const Vec3 y = kb * (zeta - dzeta * di);
+        w += 0.5 * kb * zeta.squaredNorm();
+        self_d -= kb * (dz * zeta + dzeta * z_raw);
+        pf -= y * bc[t].xi.transpose();
+        force_m += y;
+        // director non-affine stabilisation
+        const Vec3 yd = dj - di - d * bc[t].xi - y0_.col(b);
+        const Real kd = bc[t].director;
+        w += 0.5 * kd * yd.squaredNorm();
+        pd -= kd * yd * bc[t].xi.transpose();
+        s.bond_m.col(b) = force_m;
+        s.bond_d.col(b) = kd * yd;
+      }
+      for (Index t = 0; t < nf; ++t) {
+        const Index b = b0 + t;
+        s.bond_m.col(b) = volume_[i] * (s.bond_m.col(b) + pf * bc[t].weighted_shape);
+        s.bond_d.col(b) = volume_[i] * (s.bond_d.col(b) + pd * bc[t].weighted_shape);
+      }
+      s.self_d.col(i) = volume_[i] * self_d;
+      s.self_a.col(i) = volume_[i] * et * q * di;
+      s.energy[i] = volume_[i] * w;
+      s.membrane_stress.col(i) = sigma;
+      s.membrane_trace[i] = e[0] + e[1];
+      s.membrane_strain.col(i) = e;
+      s.curvature.col(i) = k;
+      s.shear.col(i) = gamma_c;
     }
-    const Eigen::Matrix2d ftf = f.transpose() * f, ftd = f.transpose() * d;
-    const Vec3 e(0.5 * (ftf(0, 0) - metric0_(0, i)), 0.5 * (ftf(1, 1) - metric0_(1, i)), ftf(0, 1) - metric0_(2, i));
-    const Vec3 k = Vec3(ftd(0, 0), ftd(1, 1), ftd(0, 1) + ftd(1, 0)) - curvature0_.col(i);
-    const Real nu = poisson_[i], alpha = nu / (1 - nu), et = young_[i];
-    const Real q = s.a_norm[i] - a0_norm_[i] + alpha * (e[0] + e[1]);
-    const Mat3& cps = plane_stress_[static_cast<std::size_t>(i)];
-    const Vec3 ce = cps * e, ck = bending_factor_ * (cps * k);
-    const Vec3 sigma = ce + Vec3(et * q * alpha, et * q * alpha, 0);
-    Real w = 0.5 * e.dot(ce) + 0.5 * et * q * q + 0.5 * k.dot(ck);
-    Eigen::Matrix2d S, M;
-    S << sigma[0], sigma[2], sigma[2], sigma[1];
-    M << ck[0], ck[2], ck[2], ck[1];
-    Mat32 pf = f * S + d * M, pd = f * M;
-    const Mat3 p = Mat3::Identity() - di * di.transpose();
-    // transverse shear: bond measures s_b = (m_j - m_i) . (d_i + d_j) / 2 (exact zero for quadratic w
-    // with linear d), the column shear gamma = sum_b v_b s_b B_b - gamma0 (their fit: exact for uniform
-    // shear and pure bending on any family) and the non-affine bond parts eta_b = (s_b - gamma_raw . xi_b) / |xi_b|
-    thread_local std::vector<Real> shear_s, shear_eta;
-    shear_s.resize(static_cast<std::size_t>(b1 - b0));
-    shear_eta.resize(static_cast<std::size_t>(b1 - b0));
-    Eigen::Vector2d gamma_raw = Eigen::Vector2d::Zero();
-    for (Index b = b0; b < b1; ++b) {
-      const Index j = fam.neighbour(b);
-      const Real sb = (s.m.col(j) - mi).dot(di + s.d.col(j)) * 0.5;
-      shear_s[static_cast<std::size_t>(b - b0)] = sb;
-      gamma_raw += v_[b] * sb * shape_b_.col(b);
-    }
-    const Eigen::Vector2d gamma_c = gamma_raw - shear0_.col(i);
-    const Eigen::Vector2d tau = shear_modulus_[i] * gamma_c;
-    w += 0.5 * tau.dot(gamma_c);
-    Eigen::Vector2d lambda = Eigen::Vector2d::Zero();
-    for (Index b = b0; b < b1; ++b) {
-      const Real length = xi_.col(b).norm();
-      const Real eta = (shear_s[static_cast<std::size_t>(b - b0)] - gamma_raw.dot(xi_.col(b))) / length - gamma0_[b];
-      shear_eta[static_cast<std::size_t>(b - b0)] = eta;
-      w += 0.5 * bond_shear_[b] * v_[b] * eta * eta;
-      lambda += bond_shear_[b] * v_[b] * eta / length * xi_.col(b);
-    }
-    Vec3 self_d = Vec3::Zero();
-    for (Index b = b0; b < b1; ++b) {
-      const Index j = fam.neighbour(b);
-      const Vec3 dm = s.m.col(j) - mi, dj = s.d.col(j), dd = dj - di;
-      // d W / d s_b, then s_b's dependence on m_j - m_i, d_i and d_j
-      const Real sigma_b = v_[b] * (tau - lambda).dot(shape_b_.col(b)) +
-                           bond_shear_[b] * v_[b] * shear_eta[static_cast<std::size_t>(b - b0)] / xi_.col(b).norm();
-      Vec3 force_m = sigma_b * 0.5 * (di + dj);
-      self_d += sigma_b * 0.5 * dm;
-      s.bond_dj.col(b) = volume_[i] * sigma_b * 0.5 * dm;
-      // in-plane non-affine stabilisation (tangent projection)
-      const Vec3 z_raw = dm - f * xi_.col(b);
-      const Vec3 zeta = p * z_raw - z0_.col(b);
-      const Real kb = membrane_factor_ * stabilizer_[b];
-      const Vec3 y = kb * (p * zeta);
-      w += 0.5 * kb * zeta.squaredNorm();
-      self_d -= kb * (di.dot(z_raw) * zeta + zeta.dot(di) * z_raw);
-      pf -= y * xi_.col(b).transpose();
-      force_m += y;
-      // director non-affine stabilisation
-      const Vec3 yd = dd - d * xi_.col(b) - y0_.col(b);
-      const Real kd = bending_factor_ * stabilizer_[b];
-      w += 0.5 * kd * yd.squaredNorm();
-      pd -= kd * yd * xi_.col(b).transpose();
-      s.bond_m.col(b) = force_m;
-      s.bond_d.col(b) = kd * yd;
-    }
-    for (Index b = b0; b < b1; ++b) {
-      s.bond_m.col(b) = volume_[i] * (s.bond_m.col(b) + v_[b] * pf * shape_b_.col(b));
-      s.bond_d.col(b) = volume_[i] * (s.bond_d.col(b) + v_[b] * pd * shape_b_.col(b));
-    }
-    s.self_d.col(i) = volume_[i] * self_d;
-    s.self_a.col(i) = volume_[i] * et * q * di;
-    s.energy[i] = volume_[i] * w;
-    s.membrane_stress.col(i) = sigma;
-    s.membrane_trace[i] = e[0] + e[1];
-    s.membrane_strain.col(i) = e;
-    s.curvature.col(i) = k;
-    s.shear.col(i) = gamma_c;
   }
 }
 

@@ -96,6 +96,16 @@ class PeridynamicPlate : public PeridynamicModel {
   PointMatrix m0_, d0_, reference_residual_;
   Eigen::Matrix<Real, 6, Eigen::Dynamic> f0_, dd0_;
   Eigen::VectorXd layer_volume_;             // per node
+  // the per-bond constants of update(), packed bond by bond (one cache stream in the hot loop)
+  struct BondConstants {
+    Eigen::Vector2d weighted_shape;  // v_b B_b
+    Eigen::Vector2d xi;              // reference in-plane bond
+    Real inverse_length = 0;         // 1 / |xi_b|
+    Real membrane = 0, director = 0; // 4 k_b and t^2/12 k_b (stabilisation)
+    Real shear = 0;                  // g_b v_b (bond-shear stabilisation)
+    Index neighbour = 0;
+  };
+  std::vector<BondConstants> bond_constants_;
   PlateStatistics statistics_;
 };
 

@@ -42,7 +42,13 @@ struct AdaptiveDynamicRelaxationOptions {
   int continuations = 4;            // further max_iterations blocks from the reached state before a halving
   Real density_factor = 1.0;        // lambda_ii = density_factor / 4 dt^2 sum_j |K0_ij|
   Real velocity_guard = 1e-10;      // 1K_ii = 0 where |Udot_i| < guard |U_i|
-  bool secant_predictor = true;     // start each increment from the extrapolated previous states
+  enum class Predictor { previous, secant, quadratic };
+  Predictor predictor = Predictor::secant;  // start of an increment: the previous field, or its extrapolation
+                                            // through the last two (secant) or three (quadratic) states
+  enum class DampingEstimate { total, increment };
+  // the displacement in the Rayleigh quotient of seed eq (6): U (the seed) or U - U_start (the part
+  // still being relaxed in this increment; the quotient then follows the slow buckling mode)
+  DampingEstimate damping_estimate = DampingEstimate::increment;
   bool linear_start = false;        // first increment starts from the linear solution (else interpolated)
   bool kinetic_fallback = true;     // kinetic-energy damping while the adaptive damping c is zero
 };
