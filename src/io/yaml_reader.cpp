@@ -373,7 +373,8 @@ std::string NodeReader::file_path(const std::string& key, const std::string& exp
   std::filesystem::path path(name);
   if (path.is_relative()) path = std::filesystem::path(sink_->file()).parent_path() / path;
   std::error_code ignored;
-  const std::filesystem::path absolute = std::filesystem::absolute(path, ignored).lexically_normal();
+  std::filesystem::path absolute = std::filesystem::absolute(path, ignored).lexically_normal();
+  if (!absolute.has_filename() && absolute.has_parent_path()) absolute = absolute.parent_path();  // "dir/" -> "dir"
   if (!absolute.empty()) path = absolute;
   std::string problem;
   if (!std::filesystem::exists(path, ignored)) problem = "no such file";
