@@ -162,6 +162,7 @@ void MpfemAnalysis::rebuild(const Points2& positions) {
     throw InputError("mpfem", fmt::format("{} particle positions", problem_.layout.positions.cols()),
                      fmt::format("{}", positions.cols()));
   problem_.layout.positions = positions;
+  problem_.options.body_area.reset();  // the reference body's area no longer applies to moved particles
   discretization_ = build_particle_elements(problem_.layout, problem_.options.elements);
   if (cell_strain_) build_cell_operators();
   solved_ = false;

@@ -3,6 +3,7 @@
 // displacements, 1e-8 stresses) on unstructured particle sets: uniform random, jittered 0.3 and
 // 0.45 with sector neighbours, a Gmsh triangle mesh's nodes, and issue 21's 287-particle cloud.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <cstdio>
@@ -189,6 +190,29 @@ TEST(mpfem_voronoi, PatchTestDetectsAWrongStiffness) {
   MpfemAnalysis analysis(p, {});
   analysis.solve();
   EXPECT_GT(analysis.errors().max_displacement, 1e-4);
+}
+
+TEST(mpfem_voronoi, DeterministicAcrossThreadCountsAndRebuilt) {
+  MpfemProblem problem = patch(random_cloud(215, 0.6, 21), false, ParticleStrain::voronoi);
+  problem.loads[0].vector[1].constant = 5.0;  // not a patch field: a general solution
+  problem.options.body_area = kWidth * kHeight;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  MpfemAnalysis one(problem, {});
+  one.solve();
+  omp_set_num_threads(std::max(2, threads));
+  MpfemAnalysis many(problem, {});
+  many.solve();
+  omp_set_num_threads(threads);
+  const solve::SparseMatrix difference = one.stiffness() - many.stiffness();
+  EXPECT_EQ(one.stiffness().nonZeros(), many.stiffness().nonZeros());
+  for (int c = 0; c < difference.outerSize(); ++c)
+    for (solve::SparseMatrix::InnerIterator it(difference, c); it; ++it) EXPECT_EQ(it.value(), 0.0);
+  // moved particles (a rotation and a stretch of the plate): cells rebuilt, the volume follows
+  Eigen::Matrix2d map;
+  map << 1.2 * std::cos(0.4), -0.9 * std::sin(0.4), 1.2 * std::sin(0.4), 0.9 * std::cos(0.4);
+  one.rebuild(map * problem.layout.positions);
+  EXPECT_NEAR(one.total_volume(), 0.1 * kWidth * kHeight * map.determinant(), 1e-12);
 }
 
 TEST(mpfem_voronoi, SparseCloudNamesTheParticle) {
