@@ -212,18 +212,18 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
 
   const bool grid_rule = p.options.elements.rule == mpfem::NeighbourRule::logical_grid;
   if (o.particle_strain == "cell" && !grid_rule)
-    throw InputError(Diagnostic{c.file, 0, 0, "mpfem.particle_strain",
-                                "particle_strain: star (or auto) for particles without a generator grid / neighbours: sectors",
-                                "cell"});
+    throw InputError("mpfem.particle_strain",
+                     "particle_strain: voronoi, star or auto for particles without a generator grid / neighbours: sectors",
+                     "cell");
   // voronoi needs a convex body (cells clipped to the particles' convex hull): box and plate without a
   // hole; a mesh is taken as convex (a cell reaching across a concave part is refused by its reach)
   const bool convex = (g.type == geometry::GeometryType::box && !o.hole) || g.type == geometry::GeometryType::plate ||
                       g.type == geometry::GeometryType::mesh;
   if (o.particle_strain == "voronoi" && !convex)
-    throw InputError(Diagnostic{c.file, 0, 0, "mpfem.particle_strain",
-                                "particle_strain: star, cell or auto for a body that is not convex (voronoi clips the cells to "
-                                "the particles' convex hull: box, plate or a mesh of a convex body)",
-                                "voronoi"});
+    throw InputError("mpfem.particle_strain",
+                     "particle_strain: star, cell or auto for a body that is not convex (voronoi clips the cells to the "
+                     "particles' convex hull: box, plate or a mesh of a convex body)",
+                     "voronoi");
   if (o.particle_strain == "star") p.options.particle_strain = mpfem::ParticleStrain::star;
   else if (o.particle_strain == "cell") p.options.particle_strain = mpfem::ParticleStrain::cell;
   else if (o.particle_strain == "voronoi" || !grid_rule) {

@@ -123,7 +123,7 @@ MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes)
     if (problem_.options.particle_strain == ParticleStrain::cell &&
         (!problem_.layout.grid || discretization_.rule != NeighbourRule::logical_grid))
       throw InputError("mpfem.particle_strain",
-                       "particle_strain: star for particle sets without a generator grid (or neighbours: sectors)", "cell");
+                       "particle_strain: voronoi or star for particle sets without a generator grid (or neighbours: sectors)", "cell");
     build_cell_operators();
   }
   if (problem_.options.element == ElementKind::t3) {
