@@ -34,7 +34,7 @@ PointCloud cloud_of(const std::vector<Vec3>& points, const geometry::GeometrySpe
 
 PointCloud read_nodes_csv(const std::string& path, const geometry::GeometrySpec& spec, const std::string& key) {
   std::ifstream in(path);
-  if (!in) throw InputError(Diagnostic{path, 0, 0, key, "a readable CSV file of x,y,z", "a file that cannot be opened"});
+  if (!in) throw InputError(Diagnostic{path, 0, 0, key, "a readable CSV file of x,y,z", fmt::format("cannot open file '{}'", path)});
   std::vector<Vec3> points;
   std::string line;
   int line_number = 0;

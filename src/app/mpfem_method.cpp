@@ -37,7 +37,7 @@ std::unique_ptr<MethodOptions> read_mpfem(const io::Case&, const io::NodeReader&
   o.element = section.word("element", {"five_node", "t3"}, "five_node") == "t3" ? mpfem::ElementKind::t3
                                                                                 : mpfem::ElementKind::five_node;
   o.stabilization = section.real("stabilization", 0.1, 0.0, 1.0, true, false);
-  result->particle_strain = section.word("particle_strain", {"auto", "cell", "star"}, "auto");
+  result->particle_strain = section.word("particle_strain", {"auto", "cell", "star", "voronoi"}, "auto");
   result->neighbours = section.word("neighbours", {"auto", "grid", "sectors"}, "auto");
   o.elements.max_neighbour_distance = section.real("max_neighbour_distance", 3.0, 1.0, 100.0);
   o.traction_quadrature = section.word("traction_quadrature", {"gauss", "particle"}, "gauss") == "particle"
@@ -179,6 +179,21 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
   }
   const Index n = model->cloud.size();
   p.layout.positions = model->cloud.positions.topRows(2);
+  if (c.discretization.particles_file && g.type != geometry::GeometryType::mesh) {
+    // a particle file over an analytic body: every particle must lie in it (in x-y)
+    const Vec3 extent = model->cloud.positions.rowwise().maxCoeff() - model->cloud.positions.rowwise().minCoeff();
+    const Real tolerance = 1e-9 * std::max<Real>(extent.norm(), 1e-300);
+    Index outside = 0, first = -1;
+    for (Index q = 0; q < n; ++q)
+      if (!geometry::body_contains(g, Vec3(p.layout.positions(0, q), p.layout.positions(1, q), p.z_mid), tolerance))
+        first = first < 0 ? q : first, ++outside;
+    if (outside > 0)
+      throw InputError("discretization.particles.file", fmt::format("particles inside the {} geometry", geometry::to_string(g.type)),
+                          fmt::format("particle {} at ({:.6g}, {:.6g}) outside the body ({} particle(s) outside in "
+                                      "'{}'); move it inside or remove it",
+                                      first, p.layout.positions(0, first), p.layout.positions(1, first), outside,
+                                      *c.discretization.particles_file));
+  }
   if (generated) {
     const bool periodic = g.type == geometry::GeometryType::annulus && !g.slit;
     p.layout.grid = mpfem::LogicalGrid{counts[0], counts[1], periodic};
@@ -197,11 +212,27 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
 
   const bool grid_rule = p.options.elements.rule == mpfem::NeighbourRule::logical_grid;
   if (o.particle_strain == "cell" && !grid_rule)
-    throw InputError(Diagnostic{c.file, 0, 0, "mpfem.particle_strain",
-                                "particle_strain: star (or auto) for particles without a generator grid / neighbours: sectors",
-                                "cell"});
-  p.options.particle_strain = o.particle_strain == "star" || !grid_rule ? mpfem::ParticleStrain::star
-                                                                        : mpfem::ParticleStrain::cell;
+    throw InputError("mpfem.particle_strain",
+                     "particle_strain: voronoi, star or auto for particles without a generator grid / neighbours: sectors",
+                     "cell");
+  // voronoi needs a convex body (cells clipped to the particles' convex hull): box and plate without a
+  // hole; a mesh is taken as convex (a cell reaching across a concave part is refused by its reach)
+  const bool convex = (g.type == geometry::GeometryType::box && !o.hole) || g.type == geometry::GeometryType::plate ||
+                      g.type == geometry::GeometryType::mesh;
+  if (o.particle_strain == "voronoi" && !convex)
+    throw InputError("mpfem.particle_strain",
+                     "particle_strain: star, cell or auto for a body that is not convex (voronoi clips the cells to the "
+                     "particles' convex hull: box, plate or a mesh of a convex body)",
+                     "voronoi");
+  if (o.particle_strain == "star") p.options.particle_strain = mpfem::ParticleStrain::star;
+  else if (o.particle_strain == "cell") p.options.particle_strain = mpfem::ParticleStrain::cell;
+  else if (o.particle_strain == "voronoi" || !grid_rule) {
+    p.options.particle_strain = convex ? mpfem::ParticleStrain::voronoi : mpfem::ParticleStrain::star;
+  } else {
+    p.options.particle_strain = mpfem::ParticleStrain::cell;
+  }
+  if (p.options.particle_strain == mpfem::ParticleStrain::voronoi && g.type != geometry::GeometryType::mesh)
+    p.options.body_area = geometry::body_volume(g) / p.thickness;
   std::vector<Diagnostic> problems;
   // materials: each particle takes the first material whose selection holds there
   p.material_of_particle.assign(static_cast<std::size_t>(n), -1);
@@ -289,7 +320,18 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
     p.loads.push_back(load);
   }
   if (!problems.empty()) throw InputError(problems);
-  return std::make_unique<mpfem::MpfemAnalysis>(std::move(p), model->probes);
+  // the particle set's problems (coincident or isolated particles, cells) at the key the case names it with
+  const std::string source = g.type == geometry::GeometryType::mesh ? "geometry.file"
+                             : c.discretization.particles_file  ? "discretization.particles.file"
+                                                                : "discretization.particles";
+  try {
+    return std::make_unique<mpfem::MpfemAnalysis>(std::move(p), model->probes);
+  } catch (const InputError& e) {
+    std::vector<Diagnostic> located = e.diagnostics();
+    for (auto& d : located)
+      if (d.file.empty() && d.key_path == "discretization.particles") d.key_path = source;
+    throw InputError(located);
+  }
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 //   plane: stress                      # stress | strain
 //   element: five_node                 # five_node (MPFEM) | t3 (reference linear triangles on the same grid particles)
 //   stabilization: 0.1                 # beta in (0, 1]: weight of the element-deviation term of the stiffness
+//   particle_strain: auto              # auto (cell on grid particle sets, voronoi on other sets of convex bodies,
+//                                      #   else star) | cell | voronoi | star (docs/mpfem.md section 4)
 //   neighbours: auto                   # auto (grid for generated particles, else sectors) | grid | sectors
 //   max_neighbour_distance: 3.0        # sectors: neighbours within this x the median nearest-particle distance
 //   traction_quadrature: gauss         # gauss (2 points per boundary segment) | particle (seed eq 6: t(x_I) dS_I)

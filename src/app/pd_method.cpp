@@ -39,9 +39,7 @@ void read_imperfection(const io::NodeReader& r, ImperfectionOptions& o) {
   o.amplitude = r.real("amplitude", std::nullopt, 0.0, INFINITY);
   if (r.has("file")) {
     o.kind = ImperfectionOptions::Kind::file;
-    o.file = r.file_path("file");
-    std::ifstream test(o.file);
-    if (!test) r.child("file").error("a readable CSV file x,y,z,ux,uy,uz", "'" + o.file + "'");
+    o.file = r.file_path("file", "a readable CSV file x,y,z,ux,uy,uz");
   } else {
     const std::string shape = r.word("shape", {"sine", "buckling_mode"}, std::nullopt);
     if (shape == "sine") {

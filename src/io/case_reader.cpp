@@ -378,9 +378,7 @@ Case CaseReader::read() {
       if (read_cleanly() && s.corner_radius >= 0.5 * s.width && s.width > 0) g.child("corner_radius").error("corner_radius < width / 2", fmt::format("{}", s.corner_radius));
     } else if (type == "mesh") {
       s.type = GeometryType::mesh;
-      s.file = g.file_path("file");
-      if (!s.file.empty() && !std::filesystem::exists(s.file))
-        g.child("file").error("an existing Gmsh .msh file", "'" + s.file + "' (no such file)");
+      s.file = g.file_path("file", "an existing Gmsh .msh file");
     }
     g.reject_unknown_keys();
     geometry_clean = read_cleanly() && !type.empty();
@@ -419,9 +417,7 @@ Case CaseReader::read() {
         }
         n.reject_unknown_keys();
       } else if (n.is_map()) {
-        disc.nodes_file = n.file_path("file");
-        if (!disc.nodes_file->empty() && !std::filesystem::exists(*disc.nodes_file))
-          n.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", *disc.nodes_file));
+        disc.nodes_file = n.file_path("file", "an existing CSV file of x,y,z");
         n.reject_unknown_keys();
       } else if (auto counts = n.as_integers(3)) {
         std::array<int, 3> v{};
@@ -495,9 +491,7 @@ Case CaseReader::read() {
     if (allowed("particles") && d.has("particles")) {
       NodeReader p = d.child("particles");
       if (p.is_map()) {
-        disc.particles_file = p.file_path("file");
-        if (!disc.particles_file->empty() && !std::filesystem::exists(*disc.particles_file))
-          p.child("file").error("an existing CSV file of x,y,z", fmt::format("'{}'", *disc.particles_file));
+        disc.particles_file = p.file_path("file", "an existing CSV file of x,y,z");
         p.reject_unknown_keys();
       } else if (auto counts = p.as_integers(2)) {
         if ((*counts)[0] < 2 || (*counts)[1] < 2)

@@ -367,11 +367,21 @@ std::string NodeReader::string(const std::string& key, std::optional<std::string
   return c.as_string().value_or(fallback.value_or(std::string()));
 }
 
-std::string NodeReader::file_path(const std::string& key) const {
+std::string NodeReader::file_path(const std::string& key, const std::string& expected) const {
   const std::string name = string(key, std::nullopt);
   if (name.empty()) return name;
   std::filesystem::path path(name);
   if (path.is_relative()) path = std::filesystem::path(sink_->file()).parent_path() / path;
+  std::error_code ignored;
+  std::filesystem::path absolute = std::filesystem::absolute(path, ignored).lexically_normal();
+  if (!absolute.has_filename() && absolute.has_parent_path()) absolute = absolute.parent_path();  // "dir/" -> "dir"
+  if (!absolute.empty()) path = absolute;
+  std::string problem;
+  if (!std::filesystem::exists(path, ignored)) problem = "no such file";
+  else if (std::filesystem::is_directory(path, ignored)) problem = "a directory";
+  else if (!std::ifstream(path)) problem = "not readable";
+  if (!problem.empty())
+    child(key).error(expected, fmt::format("cannot open file '{}' (resolved to '{}': {})", name, path.string(), problem));
   return path.string();
 }
 

@@ -111,8 +111,10 @@ class NodeReader {
                    std::optional<std::string> fallback) const;
   std::string string(const std::string& key, std::optional<std::string> fallback) const;
   /// A file name at key (required), resolved against the case file's folder unless absolute: every
-  /// file a case names is found relative to the case. Empty if the key is missing or not a string.
-  std::string file_path(const std::string& key) const;
+  /// file a case names is found relative to the case. Returns the absolute path; empty if the key is
+  /// missing or not a string. A file that cannot be opened for reading (missing, a directory, no
+  /// permission) is reported at the key: expected `expected`, found "cannot open file 'X' (resolved to '/abs/X')".
+  std::string file_path(const std::string& key, const std::string& expected) const;
   Vec3 vec3(const std::string& key, std::optional<Vec3> fallback) const;
 
   /// Report every key of this mapping that was never asked for ("unknown key").

@@ -118,11 +118,12 @@ MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes)
                      "element: t3");
   discretization_ = build_particle_elements(problem_.layout, problem_.options.elements);
   cell_strain_ = problem_.options.element == ElementKind::five_node &&
-                 problem_.options.particle_strain == ParticleStrain::cell;
+                 problem_.options.particle_strain != ParticleStrain::star;
   if (cell_strain_) {
-    if (!problem_.layout.grid || discretization_.rule != NeighbourRule::logical_grid)
+    if (problem_.options.particle_strain == ParticleStrain::cell &&
+        (!problem_.layout.grid || discretization_.rule != NeighbourRule::logical_grid))
       throw InputError("mpfem.particle_strain",
-                       "particle_strain: star for particle sets without a generator grid (or neighbours: sectors)", "cell");
+                       "particle_strain: voronoi or star for particle sets without a generator grid (or neighbours: sectors)", "cell");
     build_cell_operators();
   }
   if (problem_.options.element == ElementKind::t3) {
@@ -161,6 +162,7 @@ void MpfemAnalysis::rebuild(const Points2& positions) {
     throw InputError("mpfem", fmt::format("{} particle positions", problem_.layout.positions.cols()),
                      fmt::format("{}", positions.cols()));
   problem_.layout.positions = positions;
+  problem_.options.body_area.reset();  // the reference body's area no longer applies to moved particles
   discretization_ = build_particle_elements(problem_.layout, problem_.options.elements);
   if (cell_strain_) build_cell_operators();
   solved_ = false;
@@ -228,7 +230,21 @@ void add_block(std::vector<std::pair<Index, Eigen::Matrix<Real, 3, 2>>>& list, I
 }  // namespace
 
 void MpfemAnalysis::build_cell_operators() {
-  cells_ = build_tributary_cells(problem_.layout);
+  if (problem_.options.particle_strain == ParticleStrain::voronoi) {
+    const Real reach = problem_.options.elements.max_neighbour_distance * discretization_.typical_spacing;
+    VoronoiCells voronoi = build_voronoi_cells(problem_.layout, discretization_, reach);
+    const auto& area = problem_.options.body_area;
+    if (area && std::abs(voronoi.hull_area - *area) > 1e-9 * *area)
+      throw InputError("discretization.particles",
+                       "particles on the body's corners and edges (particle_strain: voronoi integrates over the "
+                       "particles' convex hull)",
+                       fmt::format("a convex hull of area {:.9g} for a body of area {:.9g}", voronoi.hull_area, *area));
+    cells_ = std::move(voronoi.cells);
+    discretization_.boundary = std::move(voronoi.boundary);
+    discretization_.boundary_weight = std::move(voronoi.boundary_weight);
+  } else {
+    cells_ = build_tributary_cells(problem_.layout);
+  }
   const Index n = problem_.layout.positions.cols();
   discretization_.area_weight = cells_.area;
   cell_strain_ops_.assign(static_cast<std::size_t>(n), {});

@@ -2,7 +2,8 @@
 // `method: mpfem` — moving particle finite element method for 2D linear elastostatics (seed 001):
 // five-node particle elements, particle quadrature of eqs (4)-(6), essential conditions on particle dofs, CHOLMOD.
 //
-// Stiffness with particle_strain: cell (default on grid particle sets; tributary_cells.hpp):
+// Stiffness with particle_strain: cell (default on grid particle sets; tributary_cells.hpp) or voronoi
+// (default on other particle sets of convex bodies; Voronoi cells clipped to the hull, voronoi_cells.hpp):
 //   K = sum_I t [ |Omega_I| B_I^T C B_I + sum_ab M_ab,I G_a,I^T C G_b,I
 //                 + beta |Omega_I| / A_I sum_{T in E_I} A_T (B_T - B_I)^T C (B_T - B_I) ]
 //   B_I: cell-mean strain; G_a,I = sum_{J in E_I} dN_J/dx_a B_J: the strain gradient from the
@@ -39,6 +40,7 @@
 #include "mpfem/mpfem_problem.hpp"
 #include "mpfem/particle_elements.hpp"
 #include "mpfem/tributary_cells.hpp"
+#include "mpfem/voronoi_cells.hpp"
 #include "solve/sparse_linear_solver.hpp"
 
 namespace lamina::mpfem {

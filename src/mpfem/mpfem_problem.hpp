@@ -27,7 +27,9 @@ enum class TractionQuadrature { gauss, particle };
 ///   cell: mean over the particle's tributary cell (tributary_cells.hpp) plus the strain-gradient
 ///     (second-moment) term; grid particle sets only. Default.
 ///   star: mean gradient of the particle's own five-node element, dV_I = A_I / 2.
-enum class ParticleStrain { cell, star };
+///   voronoi: mean over the particle's Voronoi cell clipped to the convex hull of the particles
+///     (voronoi_cells.hpp) plus the same strain-gradient term; any particle set of a convex body.
+enum class ParticleStrain { cell, star, voronoi };
 
 struct MpfemOptions {
   PlaneKind plane = PlaneKind::stress;
@@ -37,6 +39,8 @@ struct MpfemOptions {
   Real stabilization = 0.1;     // beta of the element-deviation stabilisation (docs/mpfem.md)
   TractionQuadrature traction_quadrature = TractionQuadrature::gauss;
   std::optional<std::array<std::string, 2>> exact_displacement;  // ux, uy of x y: error probes
+  /// voronoi: the body's area when known (the particles' convex hull must cover it: corners and edges)
+  std::optional<Real> body_area;
 };
 
 /// Plane elasticity matrix (3 x 3, engineering shear) and the out-of-plane response.

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "core/error.hpp"
+#include "mpfem/particle_bins.hpp"
 
 namespace lamina::mpfem {
 
@@ -15,37 +16,6 @@ namespace {
 constexpr Real kPi = 3.14159265358979323846;
 
 std::string point_text(const Vec2& p) { return fmt::format("({:.6g}, {:.6g})", p.x(), p.y()); }
-
-/// Uniform bins over the particles' bounding box for neighbour queries.
-class ParticleBins {
- public:
-  ParticleBins(const Points2& x, Real cell) : x_(x), cell_(cell) {
-    lower_ = x.rowwise().minCoeff();
-    const Vec2 upper = x.rowwise().maxCoeff();
-    nx_ = std::max<Index>(1, static_cast<Index>((upper.x() - lower_.x()) / cell_) + 1);
-    ny_ = std::max<Index>(1, static_cast<Index>((upper.y() - lower_.y()) / cell_) + 1);
-    bins_.resize(static_cast<std::size_t>(nx_ * ny_));
-    for (Index p = 0; p < x.cols(); ++p) bins_[static_cast<std::size_t>(bin_of(x.col(p)))].push_back(p);
-  }
-  /// Calls f(q) for every particle q in the bins within `radius` of point p (superset).
-  template <class F>
-  void for_each_near(const Vec2& p, Real radius, F&& f) const {
-    const Index r = static_cast<Index>(std::ceil(radius / cell_));
-    const Index bx = coord(p.x() - lower_.x(), nx_), by = coord(p.y() - lower_.y(), ny_);
-    for (Index j = std::max<Index>(0, by - r); j <= std::min(ny_ - 1, by + r); ++j)
-      for (Index i = std::max<Index>(0, bx - r); i <= std::min(nx_ - 1, bx + r); ++i)
-        for (Index q : bins_[static_cast<std::size_t>(i + nx_ * j)]) f(q);
-  }
-
- private:
-  Index coord(Real offset, Index n) const { return std::clamp<Index>(static_cast<Index>(offset / cell_), 0, n - 1); }
-  Index bin_of(const Vec2& p) const { return coord(p.x() - lower_.x(), nx_) + nx_ * coord(p.y() - lower_.y(), ny_); }
-  const Points2& x_;
-  Real cell_;
-  Vec2 lower_;
-  Index nx_ = 1, ny_ = 1;
-  std::vector<IndexList> bins_;
-};
 
 Real bounding_area(const Points2& x) {
   const Vec2 extent = x.rowwise().maxCoeff() - x.rowwise().minCoeff();
@@ -89,28 +59,42 @@ Real median_nearest_distance(const Points2& x, const ParticleBins& bins, Real ce
   return nearest[static_cast<std::size_t>(n / 2)];
 }
 
-/// Neighbours E N W S of every particle: nearest particle per 90-degree sector.
+/// Nearest particle to p in each 90-degree sector centred on +x, +y, -x, -y, within `reach`.
+std::array<Index, 4> nearest_per_sector(const Points2& x, const ParticleBins& bins, Index p, Real reach) {
+  std::array<Index, 4> best{-1, -1, -1, -1};
+  std::array<Real, 4> distance{INFINITY, INFINITY, INFINITY, INFINITY};
+  bins.for_each_near(x.col(p), reach, [&](Index q) {
+    if (q == p) return;
+    const Vec2 d = x.col(q) - x.col(p);
+    const Real r = d.norm();
+    if (r > reach) return;
+    Real angle = std::atan2(d.y(), d.x()) + kPi / 4;  // sector k: [k pi/2 - pi/4, k pi/2 + pi/4)
+    if (angle < 0) angle += 2 * kPi;
+    const int k = std::min(3, static_cast<int>(angle / (kPi / 2)));
+    if (r < distance[static_cast<std::size_t>(k)] ||
+        (r == distance[static_cast<std::size_t>(k)] && q < best[static_cast<std::size_t>(k)])) {
+      distance[static_cast<std::size_t>(k)] = r;
+      best[static_cast<std::size_t>(k)] = q;
+    }
+  });
+  return best;
+}
+
+/// Neighbours E N W S of every particle: nearest particle per 90-degree sector. A particle without
+/// neighbours in two consecutive sectors (no element) looks again up to 2 and 4 x the reach.
 std::vector<std::array<Index, 4>> sector_neighbours(const Points2& x, const ParticleBins& bins, Real reach) {
   const Index n = x.cols();
   std::vector<std::array<Index, 4>> result(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static)
   for (Index p = 0; p < n; ++p) {
-    std::array<Index, 4> best{-1, -1, -1, -1};
-    std::array<Real, 4> distance{INFINITY, INFINITY, INFINITY, INFINITY};
-    bins.for_each_near(x.col(p), reach, [&](Index q) {
-      if (q == p) return;
-      const Vec2 d = x.col(q) - x.col(p);
-      const Real r = d.norm();
-      if (r > reach) return;
-      Real angle = std::atan2(d.y(), d.x()) + kPi / 4;  // sector k: [k pi/2 - pi/4, k pi/2 + pi/4)
-      if (angle < 0) angle += 2 * kPi;
-      const int k = std::min(3, static_cast<int>(angle / (kPi / 2)));
-      if (r < distance[static_cast<std::size_t>(k)] ||
-          (r == distance[static_cast<std::size_t>(k)] && q < best[static_cast<std::size_t>(k)])) {
-        distance[static_cast<std::size_t>(k)] = r;
-        best[static_cast<std::size_t>(k)] = q;
-      }
-    });
+    std::array<Index, 4> best{};
+    for (Real factor : {1.0, 2.0, 4.0}) {
+      best = nearest_per_sector(x, bins, p, factor * reach);
+      bool consecutive = false;
+      for (int k = 0; k < 4; ++k)
+        consecutive = consecutive || (best[static_cast<std::size_t>(k)] >= 0 && best[static_cast<std::size_t>((k + 1) % 4)] >= 0);
+      if (consecutive) break;
+    }
     result[static_cast<std::size_t>(p)] = best;
   }
   return result;

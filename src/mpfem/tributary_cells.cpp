@@ -28,7 +28,7 @@ void add_gradient(std::vector<std::pair<Index, Vec2>>& list, Index particle, con
 }  // namespace
 
 TributaryCells build_tributary_cells(const ParticleLayout& layout) {
-  if (!layout.grid) throw InputError("mpfem.particle_strain", "particle_strain: star for particle sets without a grid", "cell");
+  if (!layout.grid) throw InputError("mpfem.particle_strain", "particle_strain: voronoi or star for particle sets without a grid", "cell");
   const auto& g = *layout.grid;
   const Points2& x = layout.positions;
   const Index n = x.cols();

@@ -174,7 +174,7 @@ MpfemProblem patch_problem(const ParticleLayout& layout, Real width, Real height
 
 TEST(mpfem_analysis, PatchTestJitteredAllVariants) {
   const ParticleLayout layout = grid_layout(9, 7, 2.0, 1.0, 0.3, 7);
-  for (ParticleStrain strain : {ParticleStrain::cell, ParticleStrain::star})
+  for (ParticleStrain strain : {ParticleStrain::cell, ParticleStrain::star, ParticleStrain::voronoi})
     for (PlaneKind plane : {PlaneKind::stress, PlaneKind::strain}) {
       MpfemProblem problem = patch_problem(layout, 2.0, 1.0, plane);
       problem.options.particle_strain = strain;
