@@ -85,11 +85,74 @@ def draw(spec):
     plt.close(figure)
 
 
+def read_vtu(path, field):
+    """Points and one point-data array of a lamina VTU file (inline base64 binary, UInt32 byte count)."""
+    import base64
+    import re
+    import struct
+
+    import numpy as np
+
+    text = open(path).read()
+
+    def decode(block):
+        raw = base64.b64decode(block.strip())
+        count = struct.unpack("<I", raw[:4])[0]
+        return np.frombuffer(raw[4:4 + count], dtype="<f8")
+
+    points = re.search(r"<Points>\s*<DataArray[^>]*>\s*([^<]+)</DataArray>", text)
+    values = re.search(r'<DataArray type="Float64" Name="' + re.escape(field) +
+                       r'"(?: NumberOfComponents="(\d+)")?[^>]*>\s*([^<]+)</DataArray>', text)
+    if not points or not values:
+        raise ValueError(f"{path}: no points or no point data '{field}'")
+    components = int(values.group(1) or 1)
+    return decode(points.group(1)).reshape(-1, 3), decode(values.group(2)).reshape(-1, components)
+
+
+def draw_snapshots(spec):
+    """One contour panel per requested time / load factor: the nearest frame of the run's result.pvd,
+    the field component over the in-plane reference coordinates (averaged through the thickness)."""
+    import os
+    import re
+
+    import numpy as np
+
+    directory = spec["run_directory"]
+    pvd = open(os.path.join(directory, "result.pvd")).read()
+    frames = [(float(t), f) for t, f in re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', pvd)]
+    if not frames:
+        raise ValueError(f"{directory}/result.pvd lists no frames")
+    chosen = []
+    for wanted in spec["at"]:
+        chosen.append(min(frames, key=lambda frame: abs(frame[0] - wanted)))
+    figure, axes = plt.subplots(1, len(chosen), figsize=(3.2 * len(chosen), 3.0), dpi=120, squeeze=False)
+    for panel, (time, name) in zip(axes[0], chosen):
+        points, values = read_vtu(os.path.join(directory, name), spec["field"])
+        component = values[:, min(spec.get("component", 0), values.shape[1] - 1)]
+        key = np.round(points[:, :2], 6)
+        unique, inverse = np.unique(key, axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        mean = np.bincount(inverse, weights=component) / np.bincount(inverse)
+        contour = panel.tricontourf(unique[:, 0], unique[:, 1], mean, levels=21, cmap="RdBu_r")
+        panel.set_aspect("equal")
+        panel.set_title(f"at {time:.4g}: max |{spec['field']}_{'xyz'[spec.get('component', 0)]}| {np.abs(mean).max():.3g}",
+                        fontsize=8)
+        panel.tick_params(labelsize=7)
+        figure.colorbar(contour, ax=panel, shrink=0.8).ax.tick_params(labelsize=7)
+    figure.suptitle(spec.get("title", ""), fontsize=9)
+    figure.tight_layout()
+    figure.savefig(spec["png"])
+    plt.close(figure)
+
+
 def main():
     with open(sys.argv[1]) as handle:
         specs = json.load(handle)
     for spec in specs:
-        draw(spec)
+        if spec.get("kind") == "snapshots":
+            draw_snapshots(spec)
+        else:
+            draw(spec)
         print("wrote", spec["png"])
 
 

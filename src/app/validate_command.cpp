@@ -47,6 +47,14 @@ struct PlotSpec {
   std::optional<Real> relative_error_to;  // plot |y / value - 1| instead of y (convergence plots)
 };
 
+// Field snapshots of a run's VTU frames (e.g. buckling mode shapes along a load path): one contour
+// panel of the component per requested time / load factor (the nearest frame of result.pvd).
+struct SnapshotSpec {
+  std::string field = "displacement", title;
+  int component = 2;
+  std::vector<Real> at;
+};
+
 struct RunSpec {
   std::string name;
   bool fast = true;  // part of --fast when its case is
@@ -55,6 +63,7 @@ struct RunSpec {
   std::vector<std::string> sweep_values;
   std::vector<CheckSpec> checks;
   std::optional<PlotSpec> plot;
+  std::optional<SnapshotSpec> snapshots;
 };
 
 struct ValidationCase {
@@ -131,6 +140,16 @@ ValidationCase read_validation_case(const fs::path& directory) {
             c.reject_unknown_keys();
             run.checks.push_back(check);
           }
+        }
+        io::NodeReader shots = r.child("snapshots");
+        if (shots.defined() && shots.expect_map()) {
+          SnapshotSpec sn;
+          sn.field = shots.string("field", "displacement");
+          sn.component = static_cast<int>(shots.integer("component", 2, 0, 2));
+          if (auto at = shots.required("at").as_reals()) sn.at = *at;
+          sn.title = shots.string("title", v.name + " / " + run.name + ": " + sn.field);
+          shots.reject_unknown_keys();
+          run.snapshots = sn;
         }
         io::NodeReader plot = r.child("plot");
         if (plot.defined() && plot.expect_map()) {
@@ -430,6 +449,17 @@ int validate(const ValidateOptions& options) {
         sweep_tables.push_back(st);
       }
 
+      if (run.snapshots && !lamina.rows.empty()) {
+        nlohmann::json p;
+        p["kind"] = "snapshots";
+        p["png"] = (out / fmt::format("{}_{}_snapshots.png", v.name, run.name)).string();
+        p["title"] = run.snapshots->title;
+        p["run_directory"] = (out / v.name / run.name).string();
+        p["field"] = run.snapshots->field;
+        p["component"] = run.snapshots->component;
+        p["at"] = run.snapshots->at;
+        plots.push_back(p);
+      }
       if (run.plot && !lamina.rows.empty()) {
         nlohmann::json p;
         p["png"] = (out / fmt::format("{}_{}.png", v.name, run.name)).string();
