@@ -171,7 +171,7 @@ std::array<std::optional<ScalarField>, 3> read_component_map(const NodeReader& r
 }
 
 const std::vector<std::string> kProbeFields{"displacement", "velocity", "stress", "strain", "reaction_force", "energy",
-                                            "eigenvalue", "damage", "plastic_strain", "approximation"};
+                                            "eigenvalue", "critical_load", "damage", "plastic_strain", "approximation"};
 const std::vector<std::string> kComponents{"x", "y", "z", "xx", "yy", "zz", "xy", "yz", "zx", "magnitude", "von_mises"};
 const std::vector<std::string> kEnergyComponents{"internal", "kinetic", "external", "hourglass", "contact", "damping", "total"};
 
@@ -597,7 +597,8 @@ Case CaseReader::read() {
       probe.field = e.word("field", kProbeFields, std::nullopt);
       NodeReader component = e.child("component");
       if (probe.field == "energy") probe.component = e.word("component", kEnergyComponents, "total");
-      else if (probe.field == "eigenvalue") probe.component = std::to_string(e.integer("component", 1, 1, 1000));
+      else if (probe.field == "eigenvalue" || probe.field == "critical_load")
+        probe.component = std::to_string(e.integer("component", 1, 1, 1000));
       else if (probe.field == "approximation") probe.component = e.word("component", {"value", "x", "y", "z", "xx", "yy", "zz", "xy", "yz", "zx"}, "value");
       else if (probe.field == "plastic_strain") probe.component = e.word("component", {"value", "max"}, "value");
       else probe.component = e.word("component", kComponents, std::nullopt);
@@ -608,9 +609,9 @@ Case CaseReader::read() {
       if (e.has("set")) probe.set = e.string("set", "");
       if (e.has("select")) probe.select = read_selection(e.child("select"));
       const bool needs_point = probe.field != "reaction_force" && probe.field != "energy" && probe.field != "eigenvalue" &&
-                               !(probe.field == "plastic_strain" && probe.component == "max");
-      if (probe.field == "reaction_force" && !e.has("select") && !e.has("set"))
-        e.error("a select: (or set:) for a reaction_force probe", "none");
+                               probe.field != "critical_load" && !(probe.field == "plastic_strain" && probe.component == "max");
+      if ((probe.field == "reaction_force" || probe.field == "critical_load") && !e.has("select") && !e.has("set"))
+        e.error(fmt::format("a select: (or set:) for a {} probe", probe.field), "none");
       if (needs_point && !e.has("at") && !probe.field.empty())
         e.error(fmt::format("an at: [x, y, z] point for {} {} probe",
                             std::string("aeiou").find(probe.field[0]) != std::string::npos ? "an" : "a", probe.field),

@@ -92,7 +92,9 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
     } else if (p.field == "energy") {
       if (!in({"internal", "kinetic", "external", "total", "damping"}, p.component))
         throw InputError(where + ".component", "internal, kinetic, external, total or damping", p.component);
-    } else if (p.field == "eigenvalue") {
+    } else if (p.field == "eigenvalue" || p.field == "critical_load") {
+      if (p.field == "critical_load" && p.nodes.empty())
+        throw InputError(where + ".select", "a selection of the loaded (or displaced) nodes for a critical_load probe", "none");
       int k = 0;
       try {
         k = std::stoi(p.component);
@@ -103,8 +105,8 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
                          fmt::format("a mode number 1..{} of a buckling analysis (pd.analysis: buckling)", problem_.buckling.modes),
                          p.component);
     } else {
-      throw InputError(where + ".field", "displacement, velocity, strain, stress, reaction_force, energy or eigenvalue",
-                       p.field);
+      throw InputError(where + ".field",
+                       "displacement, velocity, strain, stress, reaction_force, energy, eigenvalue or critical_load", p.field);
     }
   }
   const auto start = Clock::now();
@@ -684,6 +686,16 @@ Real PeridynamicAnalysis::probe(const Probe& p) const {
   if (p.field == "eigenvalue") {
     const std::size_t k = static_cast<std::size_t>(std::stoi(p.component)) - 1;
     return k < eigenvalues_.size() ? eigenvalues_[k] : std::nan("");
+  }
+  if (p.field == "critical_load") {
+    // eigenvalue k times the force the selection carries in the reference pre-buckling state (the
+    // buckling load of a displacement-controlled pre-load: prescribed edge shortening, clamped edges)
+    const std::size_t k = static_cast<std::size_t>(std::stoi(p.component)) - 1;
+    if (k >= eigenvalues_.size()) return std::nan("");
+    Vec3 carried = Vec3::Zero();
+    for (Index i : p.nodes) carried += external_force_.col(i);
+    if (carried.norm() == 0) carried = reaction(p.nodes);
+    return eigenvalues_[k] * carried.norm();
   }
   // strain / stress at the nearest node
   const Index i = p.at ? nearest_node(*p.at, p.nodes) : p.nodes.front();
