@@ -108,6 +108,8 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
                              : Options::DampingEstimate::total;
     r.linear_start = qs.word("start", {"interpolated", "linear"}, "interpolated") == "linear";
     r.kinetic_fallback = qs.boolean("kinetic_fallback", true);
+    r.coordinates = qs.word("coordinates", {"columns", "nodes"}, "columns") == "columns" ? Options::Coordinates::columns
+                                                                                         : Options::Coordinates::nodes;
     qs.reject_unknown_keys();
   }
   io::NodeReader ex = section.child("explicit");

@@ -12,6 +12,8 @@
 //   U^(n+1) = U^n + dt Udot^(n+1/2)
 //   converged (seed eq (8)): max|R^k| <= tol_rel max|R^0| for k < k_switch; afterwards that OR
 //   max|R^k| <= tol_abs. R = F_int + F_ext on the free degrees of freedom.
+// Optionally in generalised coordinates q, U = T q (column modes of a plate lattice): the same
+// updates with F -> T^T F and lambda the Gershgorin bound of T^T K0 T; the test (8) stays on R.
 // The energy dissipated by the fictitious damping, sum c lambda Udot^2 dt, is accumulated.
 // Extension (kinetic_fallback, default on): while c = 0 (negative local stiffness, e.g. during a
 // snap-through) the velocities are zeroed at every peak of the fictitious kinetic energy.
@@ -20,6 +22,7 @@
 
 #include "pd/peridynamic_model.hpp"
 #include "pd/peridynamic_problem.hpp"
+#include "pd/relaxation_coordinates.hpp"
 
 namespace lamina::pd {
 
@@ -36,8 +39,11 @@ struct RelaxationResult {
 class AdaptiveDynamicRelaxation {
  public:
   /// fictitious_density: lambda per dof (3N); free: 1 for unknown dofs, 0 for prescribed ones.
+  /// coordinates (optional): relax in q with U = T q (relaxation_coordinates.hpp); lambda is then per
+  /// generalised dof. The convergence test stays on the node residual.
   AdaptiveDynamicRelaxation(const PeridynamicModel& solid, Eigen::VectorXd fictitious_density,
-                            std::vector<char> free, AdaptiveDynamicRelaxationOptions options);
+                            std::vector<char> free, AdaptiveDynamicRelaxationOptions options,
+                            const RelaxationCoordinates* coordinates = nullptr);
 
   /// Relax u (3 x N: prescribed values on constrained dofs, the start field elsewhere) to equilibrium
   /// under external_force (3 x N). Throws AnalysisError on non-finite values.
@@ -51,6 +57,7 @@ class AdaptiveDynamicRelaxation {
   Eigen::VectorXd lambda_;
   std::vector<char> free_;
   AdaptiveDynamicRelaxationOptions options_;
+  const RelaxationCoordinates* coordinates_ = nullptr;
 };
 
 }  // namespace lamina::pd

@@ -138,6 +138,7 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
 
 void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
   model_.reset();
+  plate_columns_ = nullptr;
   const BodyOptions& options = problem_.body;
   std::optional<PlateColumns> columns;
   if (options.plate_model == PlateModel::automatic && options.kinematics == Kinematics::three_dimensional &&
@@ -148,8 +149,10 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
     BodyOptions probe_options = options;
     probe_options.surface_correction = SurfaceCorrection::none;
     body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, probe_options);
-    model_ = std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
-                                                problem_.young, problem_.poisson, options);
+    auto plate = std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+                                                    problem_.young, problem_.poisson, options);
+    plate_columns_ = &plate->columns();
+    model_ = std::move(plate);
   } else {
     body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, options);
     model_ = std::make_unique<LinearPeridynamicSolid>(*body_);
@@ -288,15 +291,20 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
   }
   if (k0.rows() == 0) k0 = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
   if (!resumed_) check_unloaded_stiffness(k0);
-  Eigen::VectorXd lambda = 0.25 * options.density_factor * absolute_row_sums(k0);
   const std::vector<char> free = free_dofs(true);
+  // ADR coordinates: the column modes on a plate lattice (relaxation_coordinates.hpp), else the nodes
+  std::optional<RelaxationCoordinates> coordinates;
+  if (plate_columns_ && options.coordinates == AdaptiveDynamicRelaxationOptions::Coordinates::columns)
+    coordinates = column_coordinates(*plate_columns_, n, free);
+  Eigen::VectorXd lambda = 0.25 * options.density_factor *
+                           (coordinates ? generalised_absolute_row_sums(k0, *coordinates) : absolute_row_sums(k0));
   for (Index d = 0; d < lambda.size(); ++d)
     if (!(lambda[d] > 0)) {
       if (free[static_cast<std::size_t>(d)])
         throw AnalysisError(fmt::format("node {} has no stiffness in direction {} (isolated node?)", d / 3, d % 3));
       lambda[d] = 1.0;
     }
-  AdaptiveDynamicRelaxation relaxation(*model_, lambda, free, options);
+  AdaptiveDynamicRelaxation relaxation(*model_, lambda, free, options, coordinates ? &*coordinates : nullptr);
   if (!resumed_) sink->output_point(0, 0.0, 0.0);
   // Start field of the first increment: inverse-distance interpolation of the prescribed values.
   auto interpolated_start = [&](Real factor) {

@@ -16,6 +16,7 @@
 //   linear_buckling_load and first_buckling_ratio (imperfection: buckling_mode);
 //   explicit: kinetic_energy, strain_energy, external_work, energy_error; buckling: load_factor_k.
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -103,6 +104,7 @@ class PeridynamicAnalysis : public Analysis {
   int last_iterations_ = 0;
   Index steps_ = 0;
   std::map<std::string, Real> timings_;
+  const PlateColumns* plate_columns_ = nullptr;  // the plate model's columns (owned by model_), else null
   std::string model_reason_;  // why a 3D body is not a plate lattice (the lattice model applies)
 
   // The loop state between increments / steps (checkpointed with the fields above).

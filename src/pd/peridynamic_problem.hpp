@@ -49,6 +49,10 @@ struct AdaptiveDynamicRelaxationOptions {
   // the displacement in the Rayleigh quotient of seed eq (6): U (the seed) or U - U_start (the part
   // still being relaxed in this increment; the quotient then follows the slow buckling mode)
   DampingEstimate damping_estimate = DampingEstimate::increment;
+  enum class Coordinates { nodes, columns };
+  // the relaxed coordinates on a plate lattice: the column modes (mid-surface, director, layer
+  // residuals; relaxation_coordinates.hpp) or the node displacements of the seed
+  Coordinates coordinates = Coordinates::columns;
   bool linear_start = false;        // first increment starts from the linear solution (else interpolated)
   bool kinetic_fallback = true;     // kinetic-energy damping while the adaptive damping c is zero
 };
