@@ -120,5 +120,30 @@ TEST(SeedSupport, BoxKappaTwoQuadraticIsRegularOnPlatesAndBricks) {
         }
 }
 
+// The point where a new user's plate stopped (issue 20): the face Gauss point next to a clamped corner,
+// (0, 0.211 h, 0.211 h), has 27 nodes in its support. With the bare radius 2 h (delta 0) the node plane
+// x = 2 h lies exactly on the support boundary with zero weight, so only 2 planes carry weight along x and
+// the quadratic A is singular; with the seed's s + delta all 27 weights are positive and A is well conditioned.
+TEST(SeedSupport, CornerFaceGaussPointHoldsThreePlanesPerDirection) {
+  for (const Body& body : bodies)
+    for (Weight weight : {Weight::quartic_spline, Weight::cubic_spline}) {
+      MlsOptions options;
+      options.weight = weight;
+      const PointMatrix nodes = jittered_grid(body.counts, body.spacing, 0.0, 3, 1);
+      const Real g = 0.5 - 0.5 / std::sqrt(3.0);  // first 2-point Gauss abscissa in a unit interval
+      for (int d = 0; d < 3; ++d) {
+        Vec3 x = g * body.spacing;
+        x[d] = 0.0;  // on the face x_d = 0, next to the corner node
+        const ShapeFunctionValues values = MlsShapeFunctions(nodes, options).evaluate(x, 1);
+        EXPECT_EQ(values.neighbours.size(), 27u) << body.name;
+        EXPECT_EQ((values.phi.array() != 0.0).count(), 27) << body.name << " face " << d;
+        EXPECT_LT(values.condition, 1e8) << body.name << " face " << d;
+        MlsOptions bare = options;
+        bare.delta = 0.0;
+        EXPECT_THROW(MlsShapeFunctions(nodes, bare).evaluate(x, 1), SingularMomentMatrix) << body.name << " face " << d;
+      }
+    }
+}
+
 }  // namespace
 }  // namespace lamina::mls
