@@ -49,8 +49,8 @@ struct Layout {
 // Bar 4 x 2 x 2 in tension (seed 004 section 3.3, E = 1e4, nu = 1/3, symmetry planes, traction 1 on x = 4):
 // exact u_x = x / E. Regular layouts with the seed's 2 x 2 x 2 Gauss points (measured 2026-12-03: 3/4/5 layers
 // -0.63 / -0.31 / -0.18 %). Jittered layouts (0.2 h) with the VCI correction, which makes the linear solution
-// exact: plain 2 x 2 x 2 Gauss points leave a quadrature error of the small (kappa 2) supports cut by the cells
-// of 4-33 % on 3 layers (3.8 % with 3 x 3 x 3, 0.1 % with 4 x 4 x 4; docs/efg.md).
+// exact: plain Gauss points leave a quadrature error of the small (kappa 2) supports cut by the cells, on
+// 3 layers with this jitter -4.8 / -3.8 / -1.2 % with 2 / 3 / 4 points per direction (docs/efg.md).
 TEST(SeedSupportRuns, BarInTensionWithBoxKappaTwo) {
   const Layout layouts[] = {{3, 0.0, 2, false, 0.01}, {4, 0.0, 2, false, 0.01}, {5, 0.0, 2, false, 0.01},
                             {3, 0.2, 2, true, 1e-8},  {4, 0.2, 2, true, 1e-8},  {5, 0.2, 2, true, 1e-8}};

@@ -145,5 +145,25 @@ TEST(SeedSupport, CornerFaceGaussPointHoldsThreePlanesPerDirection) {
     }
 }
 
+// The OMLL deck's INFLENCEDOMAIN Fix radii are the seed's s + delta written out (section 2.2: "Fix 2.01 2.01
+// 1.01", "set to 2.0" on spacings 1, 1, 0.5): on a regular grid the fixed radii (kappa + delta) h_d are the same
+// supports as kappa with delta, and give the same shape functions.
+TEST(SeedSupport, FixedRadiusEqualsKappaPlusDelta) {
+  const Vec3 h(1.0, 1.0, 0.5);
+  const PointMatrix nodes = jittered_grid({6, 6, 3}, h, 0.0, 3, 1);
+  MlsOptions seed_kappa;  // kappa 2, delta 0.1
+  seed_kappa.delta = 0.01;
+  MlsOptions fixed;
+  fixed.mode = SupportMode::fixed_radius;
+  fixed.radius = Vec3(2.01, 2.01, 1.005);
+  const MlsShapeFunctions a(nodes, seed_kappa), b(nodes, fixed);
+  EXPECT_LT((a.support_radii() - b.support_radii()).cwiseAbs().maxCoeff(), 1e-12);
+  const Vec3 x(0.0, 0.2113, 0.1057);  // a face Gauss point next to the corner
+  const ShapeFunctionValues va = a.evaluate(x, 1), vb = b.evaluate(x, 1);
+  ASSERT_EQ(va.neighbours, vb.neighbours);
+  EXPECT_LT((va.phi - vb.phi).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((va.dphi - vb.dphi).cwiseAbs().maxCoeff(), 1e-10);
+}
+
 }  // namespace
 }  // namespace lamina::mls
