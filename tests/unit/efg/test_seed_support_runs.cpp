@@ -115,7 +115,27 @@ TEST(SeedSupportRuns, SeedPlateSetUpNeedsNoRemedyButTheBareRadiusIsSingular) {
     ADD_FAILURE() << "the bare radius 2 h was expected to leave A singular on a face";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("singular MLS moment matrix"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the seed's radius is s + delta"), std::string::npos) << e.what();
   }
+}
+
+// A sphere of kappa 2 leaves the node plane 2 h from a face outside (off-axis nodes lie farther than 2 h): singular
+// with the quadratic basis, and the message names the seed's sphere kappa 2.5; kappa 2.5 runs.
+TEST(SeedSupportRuns, SphereKappaTwoIsSingularOnAFaceAndNamesTheSeedsSphere) {
+  EfgProblem p = clamped_plate_quarter({11, 11, 3}, 0.3, 9.5 - 1e-9, true);
+  p.options.mls.shape = mls::SupportShape::sphere;
+  p.options.essential = EssentialMethod::nitsche;
+  EfgAnalysis a(p, {});
+  try {
+    a.solve();
+    ADD_FAILURE() << "a sphere of kappa 2 was expected to leave A singular on a face";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the seed's sphere is kappa 2.5"), std::string::npos) << e.what();
+  }
+  p.options.mls.kappa = 2.5;
+  EfgAnalysis seed_sphere(p, {});
+  ASSERT_NO_THROW(seed_sphere.solve());
+  EXPECT_NEAR(seed_sphere.displacement_at(Vec3(10, 10, 0.5))[2] / -1.03190, 1.0, 0.03);
 }
 
 }  // namespace
