@@ -35,6 +35,18 @@ const std::map<std::string, int> kTensor{{"xx", 0}, {"yy", 1}, {"zz", 2}, {"xy",
 
 std::string describe_point(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", x[0], x[1], x[2]); }
 
+/// What the seed's support convention says about a kappa support that left A singular (docs/efg.md), or "".
+std::string kappa_hint(const mls::MlsOptions& o) {
+  if (o.mode != mls::SupportMode::kappa) return "";
+  if (o.shape == mls::SupportShape::box && o.delta == 0.0)
+    return "; with delta 0 the nodes kappa h away lie on the support boundary with zero weight: the seed's radius is "
+           "s + delta (efg.support.delta, default 0.1, docs/efg.md)";
+  if (o.shape == mls::SupportShape::sphere && o.kappa < 2.5)
+    return "; a sphere of kappa 2 leaves the node plane 2 h from a face outside (the seed's sphere is kappa 2.5, its box "
+           "kappa 2: docs/efg.md)";
+  return "";
+}
+
 /// A singular MLS moment matrix is an input problem: the support is too small for the basis.
 [[noreturn]] void support_too_small(const mls::SingularMomentMatrix& e, const mls::MlsOptions& o) {
   throw InputError("efg.support",
@@ -43,8 +55,8 @@ std::string describe_point(const Vec3& x) { return fmt::format("({:.6g}, {:.6g},
                                mls::to_string(o.basis), e.basis_size()),
                    fmt::format("a singular MLS moment matrix at {} with {} neighbours (condition {:.3g}); increase "
                                "efg.support.kappa (or nearest), use basis: linear, or set efg.singular_remedy: true (grow the support where A is singular, "
-                               "the seed's SINCHECK)",
-                               describe_point(e.point()), e.neighbours(), e.condition()));
+                               "the seed's SINCHECK){}",
+                               describe_point(e.point()), e.neighbours(), e.condition(), kappa_hint(o)));
 }
 
 Mat3 gradient_of(const mls::ShapeFunctionValues& sv, const Eigen::VectorXd& u) {

@@ -120,5 +120,50 @@ TEST(SeedSupport, BoxKappaTwoQuadraticIsRegularOnPlatesAndBricks) {
         }
 }
 
+// The point where a new user's plate stopped (issue 20): the face Gauss point next to a clamped corner,
+// (0, 0.211 h, 0.211 h), has 27 nodes in its support. With the bare radius 2 h (delta 0) the node plane
+// x = 2 h lies exactly on the support boundary with zero weight, so only 2 planes carry weight along x and
+// the quadratic A is singular; with the seed's s + delta all 27 weights are positive and A is well conditioned.
+TEST(SeedSupport, CornerFaceGaussPointHoldsThreePlanesPerDirection) {
+  for (const Body& body : bodies)
+    for (Weight weight : {Weight::quartic_spline, Weight::cubic_spline}) {
+      MlsOptions options;
+      options.weight = weight;
+      const PointMatrix nodes = jittered_grid(body.counts, body.spacing, 0.0, 3, 1);
+      const Real g = 0.5 - 0.5 / std::sqrt(3.0);  // first 2-point Gauss abscissa in a unit interval
+      for (int d = 0; d < 3; ++d) {
+        Vec3 x = g * body.spacing;
+        x[d] = 0.0;  // on the face x_d = 0, next to the corner node
+        const ShapeFunctionValues values = MlsShapeFunctions(nodes, options).evaluate(x, 1);
+        EXPECT_EQ(values.neighbours.size(), 27u) << body.name;
+        EXPECT_EQ((values.phi.array() != 0.0).count(), 27) << body.name << " face " << d;
+        EXPECT_LT(values.condition, 1e8) << body.name << " face " << d;
+        MlsOptions bare = options;
+        bare.delta = 0.0;
+        EXPECT_THROW(MlsShapeFunctions(nodes, bare).evaluate(x, 1), SingularMomentMatrix) << body.name << " face " << d;
+      }
+    }
+}
+
+// The OMLL deck's INFLENCEDOMAIN Fix radii are the seed's s + delta written out (section 2.2: "Fix 2.01 2.01
+// 1.01", "set to 2.0" on spacings 1, 1, 0.5): on a regular grid the fixed radii (kappa + delta) h_d are the same
+// supports as kappa with delta, and give the same shape functions.
+TEST(SeedSupport, FixedRadiusEqualsKappaPlusDelta) {
+  const Vec3 h(1.0, 1.0, 0.5);
+  const PointMatrix nodes = jittered_grid({6, 6, 3}, h, 0.0, 3, 1);
+  MlsOptions seed_kappa;  // kappa 2, delta 0.1
+  seed_kappa.delta = 0.01;
+  MlsOptions fixed;
+  fixed.mode = SupportMode::fixed_radius;
+  fixed.radius = Vec3(2.01, 2.01, 1.005);
+  const MlsShapeFunctions a(nodes, seed_kappa), b(nodes, fixed);
+  EXPECT_LT((a.support_radii() - b.support_radii()).cwiseAbs().maxCoeff(), 1e-12);
+  const Vec3 x(0.0, 0.2113, 0.1057);  // a face Gauss point next to the corner
+  const ShapeFunctionValues va = a.evaluate(x, 1), vb = b.evaluate(x, 1);
+  ASSERT_EQ(va.neighbours, vb.neighbours);
+  EXPECT_LT((va.phi - vb.phi).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((va.dphi - vb.dphi).cwiseAbs().maxCoeff(), 1e-10);
+}
+
 }  // namespace
 }  // namespace lamina::mls
