@@ -51,6 +51,26 @@ struct PlateFixture {
 
 Real bending_rigidity(Real t) { return young * t * t * t / (12 * (1 - poisson * poisson)); }
 
+/// Per node dof, 1 = free: the 40 mm square plate supported with w = 0 on its outer columns, one in-plane
+/// pin (17.5, 17.5) and one roller (37.5, 17.5) on the bottom layer (the rigid motions).
+std::vector<char> supported_square_free_dofs(const PointCloud& cloud) {
+  const Index n = cloud.size();
+  Index pin = -1, roller = -1;
+  for (Index node = 0; node < n; ++node) {
+    const Vec3 x = cloud.positions.col(node);
+    if (pin < 0 && x.z() < 0 && std::abs(x.x() - 17.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) pin = node;
+    if (roller < 0 && x.z() < 0 && std::abs(x.x() - 37.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) roller = node;
+  }
+  std::vector<char> free(static_cast<std::size_t>(3 * n), 1);
+  for (Index node = 0; node < n; ++node) {
+    const Vec3 x = cloud.positions.col(node);
+    const bool edge = x.x() < 3 || x.x() > 37 || x.y() < 3 || x.y() > 37;
+    for (int a = 0; a < 3; ++a)
+      if ((a == 2 && edge) || (node == pin && a < 2) || (node == roller && a == 1)) free[static_cast<std::size_t>(3 * node + a)] = 0;
+  }
+  return free;
+}
+
 }  // namespace
 
 TEST(PeridynamicPlate, FindsColumnsOfPlateLatticesOnly) {
@@ -224,21 +244,10 @@ TEST(PeridynamicPlate, SupportedStiffnessPositiveAndBoundedByFictitiousDensity) 
     Eigen::MatrixXd k = Eigen::MatrixXd(Eigen::MatrixXd(k0).selfadjointView<Eigen::Upper>());
     const Eigen::VectorXd lambda = 0.25 * absolute_row_sums(k0);
     // supports: w = 0 on the outer columns, one in-plane pin and one roller (the rigid motions)
+    const std::vector<char> free_flags = supported_square_free_dofs(f.cloud);
     std::vector<Index> free;
-    Index pin = -1, roller = -1;
-    for (Index node = 0; node < n; ++node) {
-      const Vec3 x = f.cloud.positions.col(node);
-      if (pin < 0 && x.z() < 0 && std::abs(x.x() - 17.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) pin = node;
-      if (roller < 0 && x.z() < 0 && std::abs(x.x() - 37.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) roller = node;
-    }
-    for (Index node = 0; node < n; ++node) {
-      const Vec3 x = f.cloud.positions.col(node);
-      const bool edge = x.x() < 3 || x.x() > 37 || x.y() < 3 || x.y() > 37;
-      for (int a = 0; a < 3; ++a) {
-        if ((a == 2 && edge) || (node == pin && a < 2) || (node == roller && a == 1)) continue;
-        free.push_back(3 * node + a);
-      }
-    }
+    for (Index d = 0; d < 3 * n; ++d)
+      if (free_flags[static_cast<std::size_t>(d)]) free.push_back(d);
     Eigen::MatrixXd scaled(free.size(), free.size());
     for (std::size_t r = 0; r < free.size(); ++r)
       for (std::size_t c = 0; c < free.size(); ++c)
@@ -259,19 +268,7 @@ TEST(PeridynamicPlate, ColumnCoordinatesInvertKeepTheDensityBoundAndConditionBet
     const Index n = f.cloud.size(), dofs = 3 * n;
     auto columns = find_plate_columns(f.cloud.positions, f.cloud.volumes);
     ASSERT_TRUE(columns.has_value());
-    std::vector<char> node_free(static_cast<std::size_t>(dofs), 1);
-    Index pin = -1, roller = -1;
-    for (Index node = 0; node < n; ++node) {
-      const Vec3 x = f.cloud.positions.col(node);
-      if (pin < 0 && x.z() < 0 && std::abs(x.x() - 17.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) pin = node;
-      if (roller < 0 && x.z() < 0 && std::abs(x.x() - 37.5) < 1e-9 && std::abs(x.y() - 17.5) < 1e-9) roller = node;
-    }
-    for (Index node = 0; node < n; ++node) {
-      const Vec3 x = f.cloud.positions.col(node);
-      const bool edge = x.x() < 3 || x.x() > 37 || x.y() < 3 || x.y() > 37;
-      for (int a = 0; a < 3; ++a)
-        if ((a == 2 && edge) || (node == pin && a < 2) || (node == roller && a == 1)) node_free[static_cast<std::size_t>(3 * node + a)] = 0;
-    }
+    const std::vector<char> node_free = supported_square_free_dofs(f.cloud);
     const RelaxationCoordinates rc = column_coordinates(*columns, n, node_free);
     EXPECT_GT(rc.mapped_groups, 0);
     const Eigen::MatrixXd identity = Eigen::MatrixXd(rc.from_nodes * rc.to_nodes);
