@@ -232,7 +232,7 @@ void add_block(std::vector<std::pair<Index, Eigen::Matrix<Real, 3, 2>>>& list, I
 void MpfemAnalysis::build_cell_operators() {
   if (problem_.options.particle_strain == ParticleStrain::voronoi) {
     const Real reach = problem_.options.elements.max_neighbour_distance * discretization_.typical_spacing;
-    VoronoiCells voronoi = build_voronoi_cells(problem_.layout, discretization_, reach);
+    VoronoiCells voronoi = build_voronoi_cells(problem_.layout, discretization_, reach, problem_.body_boundary);
     const auto& area = problem_.options.body_area;
     if (area && std::abs(voronoi.hull_area - *area) > 1e-9 * *area)
       throw InputError("discretization.particles",

@@ -121,11 +121,12 @@ std::vector<Index> convex_hull(const Points2& x) {
   return hull;
 }
 
-VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDiscretization& d, Real max_reach) {
+VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDiscretization& d, Real max_reach,
+                                 const std::vector<Index>& body) {
   const Points2& x = layout.positions;
   const Index n = x.cols();
   const Real h = d.typical_spacing;
-  const std::vector<Index> corners = convex_hull(x);
+  const std::vector<Index> corners = body.empty() ? convex_hull(x) : body;
   if (corners.size() < 3)
     throw InputError("discretization.particles", "particles spread over an area (not on one line)",
                      fmt::format("{} particles whose convex hull has no area", n));
