@@ -54,8 +54,8 @@ std::vector<Index> mesh_boundary_loop(const Points2& x, const std::vector<std::a
   } while (at != loop.front() && loop.size() <= next.size());
   if (loop.size() != next.size())
     throw InputError(key, expected,
-                     fmt::format("{} boundary loops (a hole or separate parts; {} of {} boundary nodes on the first)",
-                                 "more than one", loop.size(), next.size()));
+                     fmt::format("several boundary loops (a hole or separate parts; {} of {} boundary nodes on the first)",
+                                 loop.size(), next.size()));
   return loop;
 }
 
