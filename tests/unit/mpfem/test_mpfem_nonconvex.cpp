@@ -1,6 +1,7 @@
 // Unit tests of the Voronoi cells clipped to a non-convex body (issue 21, criterion 2: NAFEMS LE1):
 // a triangle mesh's boundary loop, cells that tile the body (not its hull) to 1e-12, the
-// integration constraint, linear exactness of the smoothed gradients, and refused meshes.
+// integration constraint, linear exactness of the smoothed gradients, refused meshes, and the
+// least-squares strain fit (exact for linear strain fields).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "mpfem/mesh_boundary.hpp"
+#include "mpfem/strain_fit.hpp"
 #include "mpfem/voronoi_cells.hpp"
 
 namespace lamina::mpfem {
@@ -141,6 +143,26 @@ TEST(mpfem_nonconvex, BoundaryLoopRefusesHolesAndSeparateParts) {
   holed.triangles.erase(holed.triangles.begin() + 2 * (6 + 1), holed.triangles.begin() + 2 * (6 + 1) + 2);
   EXPECT_THROW(mesh_boundary_loop(holed.layout.positions, holed.triangles), InputError);
   EXPECT_THROW(mesh_boundary_loop(holed.layout.positions, {}), InputError);
+}
+
+TEST(mpfem_nonconvex, StrainFitReproducesLinearFields) {
+  const Mesh m = elliptic_annulus(9, 17, 0.3, 4);
+  ElementOptions options;
+  options.rule = NeighbourRule::sectors;
+  const ParticleDiscretization d = build_particle_elements(m.layout, options);
+  const VoronoiCells v = build_voronoi_cells(m.layout, d, 3.0 * d.typical_spacing, mesh_boundary_loop(m.layout.positions, m.triangles));
+  const Index n = m.layout.positions.cols();
+  auto field = [](const Vec2& x) { return Eigen::Vector3d(1 + 2 * x.x() - x.y(), -3 + 0.5 * x.x() + 4 * x.y(), 0.25 - x.x()); };
+  Eigen::Matrix3Xd mean(3, n);
+  for (Index p = 0; p < n; ++p) mean.col(p) = field(v.cells.centroid.col(p));
+  const Eigen::Matrix3Xd fitted = fit_particle_strains(m.layout.positions, v.cells.centroid, d.elements, mean);
+  Real worst = 0, moved = 0;
+  for (Index p = 0; p < n; ++p) {
+    worst = std::max(worst, (fitted.col(p) - field(m.layout.positions.col(p))).cwiseAbs().maxCoeff());
+    moved = std::max(moved, (fitted.col(p) - mean.col(p)).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst, 1e-12);
+  EXPECT_GT(moved, 1e-2);  // the centroids are not the particles: the fit moves the values there
 }
 
 }  // namespace
