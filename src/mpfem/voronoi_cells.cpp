@@ -209,9 +209,9 @@ VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDis
       problems[sp].first = reach;
       problems[sp].second = fmt::format(
           "the Voronoi cell of particle {} at {} reaches {:.3g} from it (more than {:.3g}): the particle cloud is too "
-          "sparse there, or the body is not convex (cells are clipped to the particles' convex hull); add particles "
-          "there or use mpfem.particle_strain: star",
-          p, point_text(xp), reach, max_reach);
+          "sparse there{}; add particles there or use mpfem.particle_strain: star",
+          p, point_text(xp), reach, max_reach,
+          body.empty() ? ", or the body is not convex (cells are clipped to the particles' convex hull)" : "");
       continue;
     }
     // area, moments and the smoothed gradients
