@@ -148,7 +148,9 @@ Model build_point_model_unlocated(const io::Case& c) {
     model.cloud.volumes = Eigen::VectorXd::Constant(model.cloud.size(), model.shell->area() * model.shell->thickness /
                                                                             static_cast<Real>(std::max<Index>(model.cloud.size(), 1)));
   } else if (c.geometry.type == geometry::GeometryType::mesh) {
-    model.cloud = geometry::import_gmsh(c.geometry.file).cloud;
+    geometry::ImportedMesh mesh = geometry::import_gmsh(c.geometry.file);
+    model.cloud = std::move(mesh.cloud);
+    model.triangles = std::move(mesh.triangles);
   } else if (d.nodes_file) {
     model.cloud = read_nodes_csv(*d.nodes_file, c.geometry, "discretization.nodes.file");
   } else if (d.node_coordinates) {

@@ -1,6 +1,7 @@
 #pragma once
 // The discretised body a method works on: nodes/particles generated from the case's geometry
 // and discretization, with every selection of the case resolved to node indices.
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@ namespace lamina::app {
 struct Model {
   PointCloud cloud;
   std::optional<ShellMesh> shell;         // shell methods (mpm): the mid-surface mesh; cloud = its nodes
+  std::vector<std::array<Index, 3>> triangles;  // geometry mesh: its triangles' corners (cloud indices)
   std::vector<IndexList> boundary_nodes;  // per case.boundary entry
   std::vector<IndexList> load_nodes;      // per case.loads entry
   std::vector<IndexList> material_nodes;  // per case.materials entry (all nodes when unassigned)

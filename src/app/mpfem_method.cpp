@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "geometry/expression.hpp"
 #include "geometry/generators.hpp"
+#include "mpfem/mesh_boundary.hpp"
 #include "mpfem/mpfem_analysis.hpp"
 #include "mpfem/plate_with_hole.hpp"
 
@@ -215,8 +216,8 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
     throw InputError("mpfem.particle_strain",
                      "particle_strain: voronoi, star or auto for particles without a generator grid / neighbours: sectors",
                      "cell");
-  // voronoi needs a convex body (cells clipped to the particles' convex hull): box and plate without a
-  // hole; a mesh is taken as convex (a cell reaching across a concave part is refused by its reach)
+  // voronoi needs a convex body (cells clipped to the particles' convex hull: box and plate without a
+  // hole) or a triangle mesh (cells clipped to the mesh's boundary polygon, any shape without holes)
   const bool convex = (g.type == geometry::GeometryType::box && !o.hole) || g.type == geometry::GeometryType::plate ||
                       g.type == geometry::GeometryType::mesh;
   if (o.particle_strain == "voronoi" && !convex)
@@ -233,6 +234,15 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
   }
   if (p.options.particle_strain == mpfem::ParticleStrain::voronoi && g.type != geometry::GeometryType::mesh)
     p.options.body_area = geometry::body_volume(g) / p.thickness;
+  if (p.options.particle_strain == mpfem::ParticleStrain::voronoi && !model->triangles.empty()) {
+    try {
+      p.body_boundary = mpfem::mesh_boundary_loop(p.layout.positions, model->triangles);
+    } catch (const InputError& e) {
+      std::vector<Diagnostic> located = e.diagnostics();
+      for (auto& d : located) d.key_path = "geometry.file", d.found = "'" + g.file + "': " + d.found;
+      throw InputError(located);
+    }
+  }
   std::vector<Diagnostic> problems;
   // materials: each particle takes the first material whose selection holds there
   p.material_of_particle.assign(static_cast<std::size_t>(n), -1);

@@ -11,6 +11,8 @@
 // - shell: the 4-node quadrilaterals (type 3; of second-order quads, types 10 and 16, the 4
 //   corners), with the node order of the file; shell.nodes are only the nodes those quads use,
 //   in cloud order; thickness 0 (the caller sets it).
+// - triangles: the corners of every triangle (Gmsh types 2 and 9, 3 x count, cloud indices; the
+//   2D particle methods take a triangle mesh's boundary from them).
 // - sets: each physical group (any dimension) becomes a node set named by its physical name,
 //   or "group<tag>" when unnamed; groups with the same name are merged. The shell's sets are
 //   the same sets restricted to the shell's nodes (renumbered), dropped when empty.
@@ -20,6 +22,7 @@
 // refused there with file:line:column.
 // The function initialises and finalises the Gmsh API itself (serialised by a mutex): do not
 // call it while the calling program has its own Gmsh session open.
+#include <array>
 #include <string>
 #include <vector>
 
@@ -33,6 +36,7 @@ struct ImportedMesh {
   ShellMesh shell;
   bool has_hexahedra = false;
   bool has_quads = false;
+  std::vector<std::array<Index, 3>> triangles;
   std::vector<std::size_t> node_tags;  // Gmsh tag of each cloud node
 };
 

@@ -192,6 +192,14 @@ ImportedMesh import_gmsh_with_gmsh_api(const std::string& path) {
       cloud.spacing.col(i) = d;
     }
 
+    // Triangles (linear and quadratic): their corners.
+    for (int type : {2, 9}) {
+      const Elements t = elements_of_type(type);
+      const std::size_t per = t.nodes_per_element();
+      for (std::size_t e = 0; e < t.tags.size(); ++e)
+        out.triangles.push_back({node(t.nodes[per * e]), node(t.nodes[per * e + 1]), node(t.nodes[per * e + 2])});
+    }
+
     // Quadrilaterals -> shell elements on the nodes they use.
     std::vector<std::array<Index, 4>> quads;
     for (int type : {3, 10, 16}) {

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "mpfem/strain_fit.hpp"
 
 namespace lamina::mpfem {
 
@@ -232,7 +233,7 @@ void add_block(std::vector<std::pair<Index, Eigen::Matrix<Real, 3, 2>>>& list, I
 void MpfemAnalysis::build_cell_operators() {
   if (problem_.options.particle_strain == ParticleStrain::voronoi) {
     const Real reach = problem_.options.elements.max_neighbour_distance * discretization_.typical_spacing;
-    VoronoiCells voronoi = build_voronoi_cells(problem_.layout, discretization_, reach);
+    VoronoiCells voronoi = build_voronoi_cells(problem_.layout, discretization_, reach, problem_.body_boundary);
     const auto& area = problem_.options.body_area;
     if (area && std::abs(voronoi.hull_area - *area) > 1e-9 * *area)
       throw InputError("discretization.particles",
@@ -535,6 +536,17 @@ void MpfemAnalysis::assemble_and_solve() {
         for (const auto& [q, block] : strain_gradient_[sp][static_cast<std::size_t>(a)])
           eps += offset[a] * (block * u_.segment<2>(2 * q));
       strain_.col(p) = eps;
+    }
+    if (problem_.options.particle_strain == ParticleStrain::voronoi) {
+      // unstructured sets: the least-squares fit of the neighbouring cells' mean strains (strain_fit.hpp)
+      Eigen::Matrix3Xd mean(3, n);
+#pragma omp parallel for schedule(static)
+      for (Index p = 0; p < n; ++p) {
+        Eigen::Vector3d eps = Eigen::Vector3d::Zero();
+        for (const auto& [q, block] : cell_strain_ops_[static_cast<std::size_t>(p)]) eps += block * u_.segment<2>(2 * q);
+        mean.col(p) = eps;
+      }
+      strain_ = fit_particle_strains(problem_.layout.positions, cells_.centroid, discretization_.elements, mean);
     }
   } else if (problem_.options.element == ElementKind::five_node) {
 #pragma omp parallel for schedule(static)

@@ -27,8 +27,9 @@ enum class TractionQuadrature { gauss, particle };
 ///   cell: mean over the particle's tributary cell (tributary_cells.hpp) plus the strain-gradient
 ///     (second-moment) term; grid particle sets only. Default.
 ///   star: mean gradient of the particle's own five-node element, dV_I = A_I / 2.
-///   voronoi: mean over the particle's Voronoi cell clipped to the convex hull of the particles
-///     (voronoi_cells.hpp) plus the same strain-gradient term; any particle set of a convex body.
+///   voronoi: mean over the particle's Voronoi cell clipped to the body (the convex hull of the
+///     particles, or MpfemProblem::body_boundary; voronoi_cells.hpp) plus the same strain-gradient
+///     term; any particle set of a convex body, or a mesh's nodes.
 enum class ParticleStrain { cell, star, voronoi };
 
 struct MpfemOptions {
@@ -69,6 +70,9 @@ struct MpfemLoad {
 
 struct MpfemProblem {
   ParticleLayout layout;
+  /// voronoi: the body's boundary polygon (particle indices, counter-clockwise; mesh_boundary.hpp);
+  /// empty = the particles' convex hull (a convex body)
+  std::vector<Index> body_boundary;
   Real thickness = 1.0;
   Real z_mid = 0.5;                             // z of the particles in outputs
   std::vector<material::LinearElastic> materials;

@@ -121,11 +121,12 @@ std::vector<Index> convex_hull(const Points2& x) {
   return hull;
 }
 
-VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDiscretization& d, Real max_reach) {
+VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDiscretization& d, Real max_reach,
+                                 const std::vector<Index>& body) {
   const Points2& x = layout.positions;
   const Index n = x.cols();
   const Real h = d.typical_spacing;
-  const std::vector<Index> corners = convex_hull(x);
+  const std::vector<Index> corners = body.empty() ? convex_hull(x) : body;
   if (corners.size() < 3)
     throw InputError("discretization.particles", "particles spread over an area (not on one line)",
                      fmt::format("{} particles whose convex hull has no area", n));
@@ -208,9 +209,9 @@ VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDis
       problems[sp].first = reach;
       problems[sp].second = fmt::format(
           "the Voronoi cell of particle {} at {} reaches {:.3g} from it (more than {:.3g}): the particle cloud is too "
-          "sparse there, or the body is not convex (cells are clipped to the particles' convex hull); add particles "
-          "there or use mpfem.particle_strain: star",
-          p, point_text(xp), reach, max_reach);
+          "sparse there{}; add particles there or use mpfem.particle_strain: star",
+          p, point_text(xp), reach, max_reach,
+          body.empty() ? ", or the body is not convex (cells are clipped to the particles' convex hull)" : "");
       continue;
     }
     // area, moments and the smoothed gradients

@@ -1,10 +1,13 @@
 #pragma once
-// Voronoi cells of an arbitrary particle set clipped to the particles' convex hull, and the strain
-// smoothed over them: stabilised conforming nodal integration (Chen et al. 2001) for MPFEM.
+// Voronoi cells of an arbitrary particle set clipped to the body (the particles' convex hull, or a
+// given boundary polygon of particles), and the strain smoothed over them: stabilised conforming
+// nodal integration (Chen et al. 2001) for MPFEM.
 //
-// Cell Omega_I: the points of the convex hull of the particles closer to x_I than to any other
-// particle (a convex polygon: the hull clipped by the bisector half-planes of nearby particles).
-// The cells tile the hull exactly. Smoothed gradient of particle J's shape function over Omega_I
+// Cell Omega_I: the points of the body closer to x_I than to any other particle (the body polygon
+// clipped by the bisector half-planes of nearby particles). A half-plane clip of any simple polygon
+// keeps exactly its part in the half-plane (a part cut in two is joined by a zero-width bridge along
+// the cut whose two sides cancel in every edge integral), so a non-convex body is clipped exactly;
+// on a convex hull the cells are convex. The cells tile the body exactly. Smoothed gradient of particle J's shape function over Omega_I
 // (divergence theorem):
 //   b_IJ = (1 / |Omega_I|) sum_{edges e of Omega_I} integral_e psi_J n ds,
 // with on each edge a single-valued trace psi that reproduces linear fields:
@@ -28,16 +31,18 @@ namespace lamina::mpfem {
 
 struct VoronoiCells {
   TributaryCells cells;
-  std::vector<BoundarySegment> boundary;  // hull segments between consecutive boundary particles (body on the left)
+  std::vector<BoundarySegment> boundary;  // body (hull) segments between consecutive boundary particles (body on the left)
   Eigen::VectorXd boundary_weight;        // half the lengths of the segments at each particle (0 inside)
-  Real hull_area = 0;
+  Real hull_area = 0;  // the sum of the cell areas (the hull's, or the body polygon's)
 };
 
-/// Needs the five-node elements of every particle (d.elements). InputError (key
-/// "discretization.particles") naming the particle if its cell reaches farther than
+/// Needs the five-node elements of every particle (d.elements). `body`: the body's boundary polygon,
+/// particle indices counter-clockwise (mesh_boundary.hpp); empty = the particles' convex hull.
+/// InputError (key "discretization.particles") naming the particle if its cell reaches farther than
 /// `max_reach` from it (a cloud too sparse there, or a non-convex body whose hull is not the body),
 /// or if the particles lie on one line.
-VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDiscretization& d, Real max_reach);
+VoronoiCells build_voronoi_cells(const ParticleLayout& layout, const ParticleDiscretization& d, Real max_reach,
+                                 const std::vector<Index>& body = {});
 
 /// Convex hull of 2D points, counter-clockwise, without collinear points (Andrew's monotone chain).
 std::vector<Index> convex_hull(const Points2& x);
