@@ -271,6 +271,14 @@ RunResult run_case(const RunOptions& options) {
                                        "is not bit-identical to an uninterrupted one",
                                        written_threads, omp_get_max_threads()));
       analysis->restore_state(*checkpoint.state);
+      // the result set the checkpoint continues must still hold the frames it lists
+      const auto frame_times = checkpoint.state->reals("run.frame_times");
+      for (std::size_t k = 0; k < frame_times.size(); ++k)
+        if (!std::filesystem::exists(checkpoint.file.parent_path() / io::ResultSet::frame_name(k)))
+          throw InputError("--restart",
+                           fmt::format("the result frames the checkpoint lists ({} VTU files) in {}", frame_times.size(),
+                                       checkpoint.file.parent_path().string()),
+                           fmt::format("no {}", io::ResultSet::frame_name(k)));
     } catch (const InputError& e) {
       result.exit_code = 2;
       result.error = e.what();

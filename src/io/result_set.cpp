@@ -72,7 +72,7 @@ void ResultSet::history_row(Index step, Real time, Real load_factor, const std::
 }
 
 void ResultSet::write_frame(const OutputFrame& frame, Real time) {
-  const std::string name = fmt::format("frame_{:05d}.vtu", frames_.size());
+  const std::string name = frame_name(frames_.size());
   write_vtu((staging_ / name).string(), frame);
   frames_.emplace_back(time, name);
   write_pvd((staging_ / "result.pvd").string(), frames_);
@@ -84,10 +84,12 @@ std::vector<Real> ResultSet::frame_times() const {
   return times;
 }
 
+std::string ResultSet::frame_name(std::size_t k) { return fmt::format("frame_{:05d}.vtu", k); }
+
 void ResultSet::adopt(const fs::path& folder, const std::vector<Real>& frame_times) {
   frames_.clear();
   for (std::size_t k = 0; k < frame_times.size(); ++k) {
-    const std::string name = fmt::format("frame_{:05d}.vtu", k);
+    const std::string name = frame_name(k);
     if (!fs::exists(folder / name))
       throw std::runtime_error(fmt::format("restart: {} is missing from {}", name, folder.string()));
     fs::copy_file(folder / name, staging_ / name, fs::copy_options::overwrite_existing);

@@ -33,6 +33,8 @@ class ResultSet {
   void write_frame(const OutputFrame& frame, Real time);
   /// Times of the frames written so far (frame k is frame_<k>.vtu).
   std::vector<Real> frame_times() const;
+  /// The file name of VTU frame k (frame_00000.vtu, ...).
+  static std::string frame_name(std::size_t k);
   /// A restart: copy the first frame_times.size() frames and the checkpoints of a folder written by an
   /// earlier run of the case into the staging folder, and list those frames in result.pvd.
   void adopt(const std::filesystem::path& folder, const std::vector<Real>& frame_times);

@@ -162,6 +162,19 @@ def signals_and_damage(case, work, name, reference):
               f"{name}: every checkpoint damaged by {label}: exit 2 saying '{reason}' (exit {r.returncode}) "
               f"[{r.stderr.strip()[-200:]}]")
 
+    # a result frame the checkpoint lists deleted since: exit 2 naming the missing frame
+    vtus = sorted(glob.glob(os.path.join(reference, "frame_*.vtu")))
+    if vtus:
+        folder = os.path.join(work, name + "_lost_frame")
+        shutil.rmtree(folder, ignore_errors=True)
+        shutil.copytree(reference, folder)
+        os.remove(os.path.join(folder, "frame_00000.vtu"))
+        r = lamina_run(case, folder, "--restart", folder)
+        check(r.returncode == 2 and "frame_00000.vtu" in r.stderr and "--restart" in r.stderr
+              and not glob.glob(folder + ".partial-*"),
+              f"{name}: a deleted result frame gives exit 2 naming it, no staging left (exit {r.returncode}) "
+              f"[{r.stderr.strip()[-200:]}]")
+
     # a changed case value (the case file edited): exit 2 naming the key with its line
     folder = os.path.join(work, name + "_mismatch")
     shutil.rmtree(folder, ignore_errors=True)
