@@ -273,9 +273,15 @@ int validate(const ValidateOptions& options) {
     try {
       ValidationCase v = read_validation_case(folder);
       if (options.fast && options.names.empty() && !v.fast) continue;
+      // the reference table is read (and refused when malformed) before anything runs
+      const fs::path reference_path = v.directory / v.reference_file;
+      if (fs::exists(reference_path)) io::CsvTable::read(reference_path.string());
       cases.push_back(v);
     } catch (const InputError& e) {
       std::cerr << e.what() << "\n";
+      status = 2;
+    } catch (const std::runtime_error& e) {  // a malformed reference table (file:line: expected, found)
+      std::cerr << "lamina validate: " << e.what() << "\n";
       status = 2;
     }
   }
