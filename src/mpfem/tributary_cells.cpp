@@ -4,6 +4,7 @@
 
 #include <array>
 
+#include "mpfem/gradient_list.hpp"
 #include "core/error.hpp"
 
 namespace lamina::mpfem {
@@ -15,15 +16,6 @@ struct PolygonPoint {
   Vec2 x;
   Eigen::Vector4d phi;
 };
-
-void add_gradient(std::vector<std::pair<Index, Vec2>>& list, Index particle, const Vec2& value) {
-  for (auto& [p, v] : list)
-    if (p == particle) {
-      v += value;
-      return;
-    }
-  list.emplace_back(particle, value);
-}
 
 }  // namespace
 

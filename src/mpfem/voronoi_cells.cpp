@@ -8,6 +8,7 @@
 #include <numeric>
 #include <string>
 
+#include "mpfem/gradient_list.hpp"
 #include "core/error.hpp"
 #include "mpfem/particle_bins.hpp"
 
@@ -74,15 +75,6 @@ std::array<Real, kElementNodes> star_values(const ParticleElement& e, const Poin
     values[static_cast<std::size_t>(a)] = (a == 0 ? 1.0 : 0.0) + tri.gradient.col(a).dot(d);
   }
   return values;
-}
-
-void add_gradient(std::vector<std::pair<Index, Vec2>>& list, Index particle, const Vec2& value) {
-  for (auto& [p, v] : list)
-    if (p == particle) {
-      v += value;
-      return;
-    }
-  list.emplace_back(particle, value);
 }
 
 /// The boundary particles along one hull edge, by arc length from its first vertex.
