@@ -17,6 +17,7 @@ PACKAGES=(
   libopenblas0-openmp
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy python3-vtk9
+  python3-dev pybind11-dev python3-pytest python3-yaml
 )
 if [ "${1:-}" = "--peers" ]; then
   PACKAGES+=(calculix-ccx lammps)
