@@ -35,12 +35,16 @@ std::string resolved_yaml(const io::Case& c) {
   return out.c_str();
 }
 
+/// Thrown out of Analysis::run by the sink when RunOptions::on_output asked to stop.
+struct RunStopped {};
+
 /// Receives output points from the analysis: evaluates probes, appends history, writes VTU.
 class RunSink : public OutputSink {
  public:
   RunSink(const Analysis& analysis, const io::Case& c, const Model& model, io::ResultSet& results, ProgressLine& progress,
-          RunResult& result)
-      : analysis_(analysis), case_(c), model_(model), results_(results), progress_(progress), result_(result) {}
+          const RunOptions& options, RunResult& result)
+      : analysis_(analysis), case_(c), model_(model), results_(results), progress_(progress), options_(options),
+        result_(result) {}
 
   void start() {
     result_.history_columns = {"step", "time", "load_factor"};
@@ -67,9 +71,19 @@ class RunSink : public OutputSink {
     row.insert(row.end(), values.begin(), values.end());
     result_.history_rows.push_back(row);
     last_values_ = values;
-    if (case_.output.vtu && (output_count_ % case_.output.every == 0)) results_.write_frame(analysis_.frame(), time);
+    const bool vtu = case_.output.vtu && (output_count_ % case_.output.every == 0);
+    if (vtu || options_.keep_last_frame) {
+      OutputFrame frame = analysis_.frame();
+      if (vtu) results_.write_frame(frame, time);
+      if (options_.keep_last_frame) result_.last_frame = std::move(frame);
+    }
     ++output_count_;
     ++outputs_since_checkpoint_;
+    if (options_.on_output) {
+      std::vector<std::string> all = names_;
+      all.insert(all.end(), builtin_names_.begin(), builtin_names_.end());
+      if (!options_.on_output(OutputPointReport{step, time, load_factor, &all, &values})) throw RunStopped{};
+    }
   }
 
   void progress(Real fraction, const std::string& status) override { progress_.update(fraction, status); }
@@ -147,6 +161,7 @@ class RunSink : public OutputSink {
   const Model& model_;
   io::ResultSet& results_;
   ProgressLine& progress_;
+  const RunOptions& options_;
   RunResult& result_;
   std::vector<std::string> names_, builtin_names_;
   std::vector<Real> last_values_;
@@ -183,7 +198,8 @@ std::string implemented_method_names() {
   return names;
 }
 
-PreparedCase prepare(io::CaseReader& reader) {
+PreparedCase prepare(io::CaseReader& reader, const std::string& case_directory) {
+  if (!case_directory.empty()) reader.sink().set_base_directory(case_directory);
   PreparedCase prepared;
   prepared.case_data = reader.read();
   prepared.method = find_method(prepared.case_data.method);
@@ -208,14 +224,15 @@ std::vector<io::MethodKeys> all_method_keys() {
   return keys;
 }
 
-PreparedCase prepare_case(const std::string& path, const std::vector<std::string>& overrides) {
+PreparedCase prepare_case(const std::string& path, const std::vector<std::string>& overrides,
+                          const std::string& case_directory) {
   if (io::is_omll_deck(path)) {
     io::OmllCase deck = io::read_omll_deck(path);  // deck errors: InputError with deck lines
     io::CaseReader reader(path, deck.document, deck.positions, overrides, all_method_keys());
-    return prepare(reader);
+    return prepare(reader, case_directory);
   }
   io::CaseReader reader(path, overrides, all_method_keys());
-  return prepare(reader);
+  return prepare(reader, case_directory);
 }
 
 RunResult run_case(const RunOptions& options) {
@@ -223,7 +240,7 @@ RunResult run_case(const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   PreparedCase prepared;
   try {
-    prepared = prepare_case(options.case_path, options.overrides);
+    prepared = prepare_case(options.case_path, options.overrides, options.case_directory);
   } catch (const InputError& e) {
     result.exit_code = 2;
     result.error = e.what();
@@ -313,7 +330,7 @@ RunResult run_case(const RunOptions& options) {
   }
 
   ProgressLine progress(options.quiet);
-  RunSink sink(*analysis, c, model, results, progress, result);
+  RunSink sink(*analysis, c, model, results, progress, options, result);
   nlohmann::json summary;
   summary["case"] = c.stem;
   summary["title"] = c.title;
@@ -346,6 +363,8 @@ RunResult run_case(const RunOptions& options) {
                                result.output_directory.string());
     summary["status"] = "interrupted";
     summary["error"] = result.error;
+  } catch (const RunStopped&) {
+    summary["status"] = "stopped";  // on_output returned false: a clean end at that output point
   } catch (const StateError& e) {
     result.exit_code = 2;
     result.error = fmt::format("--restart: {} does not fit this case: {}", checkpoint.file.string(), e.what());

@@ -367,11 +367,15 @@ std::string NodeReader::string(const std::string& key, std::optional<std::string
   return c.as_string().value_or(fallback.value_or(std::string()));
 }
 
+std::string DiagnosticSink::base_directory() const {
+  return base_directory_.empty() ? std::filesystem::path(file_).parent_path().string() : base_directory_;
+}
+
 std::string NodeReader::file_path(const std::string& key, const std::string& expected) const {
   const std::string name = string(key, std::nullopt);
   if (name.empty()) return name;
   std::filesystem::path path(name);
-  if (path.is_relative()) path = std::filesystem::path(sink_->file()).parent_path() / path;
+  if (path.is_relative()) path = std::filesystem::path(sink_->base_directory()) / path;
   std::error_code ignored;
   std::filesystem::path absolute = std::filesystem::absolute(path, ignored).lexically_normal();
   if (!absolute.has_filename() && absolute.has_parent_path()) absolute = absolute.parent_path();  // "dir/" -> "dir"

@@ -42,9 +42,14 @@ class DiagnosticSink {
   /// without a position, such as --set errors, last).
   void throw_if_any() const;
   const std::string& file() const { return file_; }
+  /// The folder relative file names in the case are resolved against: the case file's folder,
+  /// unless set (a case built from a Python dict stands for the file it was loaded from).
+  std::string base_directory() const;
+  void set_base_directory(std::string directory) { base_directory_ = std::move(directory); }
 
  private:
   std::string file_;
+  std::string base_directory_;
   std::vector<Diagnostic> diagnostics_;
   std::vector<std::pair<std::string, std::string>> overrides_;
   std::map<std::string, std::pair<int, int>> positions_;
