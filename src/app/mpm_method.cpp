@@ -15,7 +15,7 @@ struct MomentEntry {
   io::Selection select;
   std::array<geometry::ScalarField, 3> moment;
   bool per_edge_length = false;  // edge_moment: moment per unit length of the selected free edges
-  mpm::LoadRamp ramp;
+  Ramp ramp;
   io::SourceLocation location;
 };
 
@@ -25,27 +25,12 @@ struct MpmMethodOptions : MethodOptions {
   std::vector<MomentEntry> moments;
 };
 
-mpm::LoadRamp convert_ramp(const io::Ramp& r, Real scale) {
-  mpm::LoadRamp out;
-  out.kind = r.kind == io::Ramp::Kind::linear ? mpm::LoadRamp::Kind::linear
-             : r.kind == io::Ramp::Kind::step ? mpm::LoadRamp::Kind::step
-                                              : mpm::LoadRamp::Kind::table;
-  for (const auto& row : r.table) out.table.push_back({row[0] / scale, row[1]});
+/// The case's ramp with its table's first column divided by `scale` (end_time of a dynamic run: the
+/// analysis evaluates ramps at s = t / end_time).
+Ramp scaled_ramp(const Ramp& r, Real scale) {
+  Ramp out = r;
+  for (auto& row : out.table) row[0] /= scale;
   return out;
-}
-
-mpm::LoadRamp read_ramp(const io::NodeReader& node) {
-  mpm::LoadRamp ramp;
-  if (!node.defined()) return ramp;
-  if (node.is_scalar()) {
-    if (auto w = node.as_word({"linear", "step"})) ramp.kind = *w == "step" ? mpm::LoadRamp::Kind::step : mpm::LoadRamp::Kind::linear;
-    return ramp;
-  }
-  ramp.kind = mpm::LoadRamp::Kind::table;
-  for (const auto& row : node.elements())
-    if (auto v = row.as_reals(2)) ramp.table.push_back({(*v)[0], (*v)[1]});
-  if (ramp.table.empty()) node.error("linear, step or a table [[s0, f0], [s1, f1], ...]");
-  return ramp;
 }
 
 void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, shell::ShellSection& s) {
@@ -127,7 +112,7 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
             vector.error("three components [mx, my, mz]");
           }
         }
-        entry.ramp = read_ramp(m.child("ramp"));
+        entry.ramp = io::read_ramp(m);
         m.reject_unknown_keys();
         result->moments.push_back(entry);
       }
@@ -176,7 +161,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
     k.nodes = model.boundary_nodes[i];
     k.fixed = b.fixed;
     k.velocity = b.velocity;
-    k.ramp = convert_ramp(b.ramp, ramp_scale);
+    k.ramp = scaled_ramp(b.ramp, ramp_scale);
     k.label = fmt::format("boundary.{}", i);
     bool displacement = false;
     for (int a = 0; a < 3; ++a) {
@@ -196,7 +181,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
     load.nodes = model.load_nodes[i];
     load.vector = l.vector;
     load.scalar = l.scalar;
-    load.ramp = convert_ramp(l.ramp, ramp_scale);
+    load.ramp = scaled_ramp(l.ramp, ramp_scale);
     load.label = fmt::format("loads.{}", i);
     switch (l.kind) {
       case io::Load::Kind::force: load.kind = mpm::NodalLoad::Kind::force; break;

@@ -225,9 +225,9 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   if (!c.materials.empty() && p.young.hasNaN())
     problem_at(io::SourceLocation{c.file, 0, 0, "materials"}, "", "a material for every node", "nodes without one");
   // Ramps.
-  auto ramp_index = [&](const io::Ramp& r) -> int {
-    if (r.kind == io::Ramp::Kind::linear) return -1;
-    p.ramps.push_back([r](Real s) { return r.factor(s, 1.0); });
+  auto ramp_index = [&](const Ramp& r) -> int {
+    if (r.kind == Ramp::Kind::linear) return -1;
+    p.ramps.push_back(r);
     return static_cast<int>(p.ramps.size()) - 1;
   };
   // Boundary conditions (a later condition on the same dof replaces an earlier one).
@@ -263,9 +263,9 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
           if (b.velocity[A]) {
             d.velocity = true;
             d.value = evaluate(*b.velocity[A], p.positions.col(i));
-            if (b.ramp.kind == io::Ramp::Kind::linear) {  // velocities default to a step (constant)
+            if (b.ramp.kind == Ramp::Kind::linear) {  // velocities default to a step (constant)
               d.ramp = static_cast<int>(p.ramps.size());
-              p.ramps.push_back([](Real) { return 1.0; });
+              p.ramps.push_back(Ramp{Ramp::Kind::step, {}});
             }
           } else if (b.displacement[A]) {
             d.value = evaluate(*b.displacement[A], p.positions.col(i));

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/ramp.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
 #include "geometry/geometry_spec.hpp"
@@ -29,13 +30,6 @@ struct Selection {
   SourceLocation location;
 };
 
-/// How a load or prescribed value grows with the analysis' load factor / time.
-struct Ramp {
-  enum class Kind { linear, step, table };
-  Kind kind = Kind::linear;
-  std::vector<std::array<Real, 2>> table;  // (t, f) pairs for Kind::table
-  Real factor(Real t, Real end_time) const;
-};
 
 struct MaterialEntry {
   material::MaterialSpec spec;

@@ -123,8 +123,6 @@ std::optional<Selection> read_selection(const NodeReader& reader) {
   return selection;
 }
 
-namespace {
-
 Ramp read_ramp(const NodeReader& parent) {
   Ramp ramp;
   NodeReader r = parent.child("ramp");
@@ -147,6 +145,8 @@ Ramp read_ramp(const NodeReader& parent) {
   }
   return ramp;
 }
+
+namespace {
 
 std::array<ScalarField, 3> read_vector_field(const NodeReader& reader) {
   std::array<ScalarField, 3> out;
@@ -176,23 +176,6 @@ const std::vector<std::string> kComponents{"x", "y", "z", "xx", "yy", "zz", "xy"
 const std::vector<std::string> kEnergyComponents{"internal", "kinetic", "external", "hourglass", "contact", "damping", "total"};
 
 }  // namespace
-
-Real Ramp::factor(Real t, Real end_time) const {
-  switch (kind) {
-    case Kind::linear: return end_time > 0 ? std::clamp(t / end_time, 0.0, 1.0) : 1.0;
-    case Kind::step: return 1.0;
-    case Kind::table: {
-      if (t <= table.front()[0]) return table.front()[1];
-      for (std::size_t i = 1; i < table.size(); ++i)
-        if (t <= table[i][0]) {
-          const Real s = (t - table[i - 1][0]) / (table[i][0] - table[i - 1][0]);
-          return table[i - 1][1] + s * (table[i][1] - table[i - 1][1]);
-        }
-      return table.back()[1];
-    }
-  }
-  return 1.0;
-}
 
 CaseReader::CaseReader(const std::string& path, const std::vector<std::string>& overrides,
                        std::vector<MethodKeys> methods)

@@ -59,6 +59,8 @@ class CaseReader {
 /// Parse helpers shared with the method sections.
 geometry::ScalarField read_scalar_field(const NodeReader& reader);
 std::optional<Selection> read_selection(const NodeReader& reader);
+/// The `ramp` key under `parent`: linear (default), step, or a table [[s0, f0], [s1, f1], ...].
+Ramp read_ramp(const NodeReader& parent);
 SourceLocation location_of(const NodeReader& reader);
 
 }  // namespace lamina::io

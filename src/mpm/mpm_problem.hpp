@@ -7,26 +7,19 @@
 #include <vector>
 
 #include "core/shell_mesh.hpp"
+#include "core/ramp.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
 #include "shell/belytschko_tsay_shell.hpp"
 
 namespace lamina::mpm {
 
-/// How a load grows over the analysis (s = load factor of a quasi-static run, t / end_time otherwise).
-struct LoadRamp {
-  enum class Kind { linear, step, table };
-  Kind kind = Kind::linear;
-  std::vector<std::array<Real, 2>> table;  // (s, factor) pairs
-  Real factor(Real s) const;
-};
-
 /// Velocity conditions at shell nodes (fix = zero velocity), applied on the grid and at the nodes (eq (7)).
 struct NodalConstraint {
   IndexList nodes;
   std::array<bool, 6> fixed{};                                          // x y z rx ry rz
   std::array<std::optional<geometry::ScalarField>, 3> velocity;         // prescribed, expressions of x y z t
-  LoadRamp ramp;
+  Ramp ramp;  // progress s: the load factor (quasi-static) or t / end_time (dynamic)
   std::string label;
 };
 
@@ -36,7 +29,7 @@ struct NodalLoad {
   IndexList nodes;
   std::array<geometry::ScalarField, 3> vector;  // force / traction / body force (per unit mass) / moment / moment per unit edge length / velocity
   geometry::ScalarField scalar;                 // pressure, mass
-  LoadRamp ramp;
+  Ramp ramp;  // progress s: the load factor (quasi-static) or t / end_time (dynamic)
   std::string label;
 };
 

@@ -160,7 +160,7 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
 }
 
 Real PeridynamicAnalysis::ramp(int index, Real factor) const {
-  return index < 0 ? factor : problem_.ramps[static_cast<std::size_t>(index)](factor);
+  return index < 0 ? factor : problem_.ramps[static_cast<std::size_t>(index)].factor(factor);
 }
 
 PointMatrix PeridynamicAnalysis::external_force(Real factor) const {

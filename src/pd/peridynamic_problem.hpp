@@ -2,16 +2,13 @@
 // PeridynamicProblem: everything a `method: pd` analysis needs, translated from the case by the
 // application (this module knows no files and no YAML): nodes, materials, body options,
 // prescribed degrees of freedom, nodal loads, the analysis kind and its solver parameters.
-#include <functional>
 #include <string>
 #include <vector>
 
+#include "core/ramp.hpp"
 #include "pd/peridynamic_body.hpp"
 
 namespace lamina::pd {
-
-/// Growth of a prescribed value / load with the analysis parameter (load factor or time).
-using RampFunction = std::function<Real(Real)>;
 
 /// Prescribed displacement (or, for explicit runs, velocity) of one degree of freedom.
 struct PrescribedDof {
@@ -85,7 +82,7 @@ struct PeridynamicProblem {
   std::vector<PrescribedDof> prescribed;
   std::vector<NodalForce> forces;
   PointMatrix initial_velocity;     // empty or 3 x N
-  std::vector<RampFunction> ramps;  // non-linear ramps referred to by index (argument: t / end)
+  std::vector<Ramp> ramps;  // non-linear ramps referred to by index (progress: the load factor or t / end)
   PdAnalysisKind analysis = PdAnalysisKind::quasi_static;
   AdaptiveDynamicRelaxationOptions relaxation;
   ExplicitOptions explicit_options;
