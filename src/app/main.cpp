@@ -29,8 +29,6 @@ int info() {
                            lamina::version, lamina::build_type, omp_get_max_threads());
   std::cout << "methods:\n";
   for (const auto& m : lamina::app::methods()) std::cout << fmt::format("  {:<8} {}\n", m.keys.method, m.summary);
-  for (const auto& name : lamina::app::planned_methods())
-    if (!lamina::app::find_method(name)) std::cout << fmt::format("  {:<8} (not implemented yet)\n", name);
   std::cout << "features: yaml case files, --set overrides, VTU/PVD output, Gmsh .msh import, muParser expressions,\n"
                "          MLS shape functions (linear/quadratic, gauss/cubic/quartic spline, box/sphere/nearest/all/variable)\n";
   return 0;

@@ -120,9 +120,4 @@ const MethodEntry* find_method(const std::string& name) {
   return nullptr;
 }
 
-const std::vector<std::string>& planned_methods() {
-  static const std::vector<std::string> names{};
-  return names;
-}
-
 }  // namespace lamina::app

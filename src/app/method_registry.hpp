@@ -16,6 +16,8 @@ namespace lamina::app {
 /// A method's parsed section: an opaque, method-owned options object.
 struct MethodOptions {
   virtual ~MethodOptions() = default;
+  /// What the method needs of the discretised body (a shell mesh, lattice layers) beyond the case's keys.
+  virtual ModelRequest model_request() const { return {}; }
 };
 
 struct MethodEntry {
@@ -33,7 +35,5 @@ struct MethodEntry {
 /// All methods compiled into this binary.
 const std::vector<MethodEntry>& methods();
 const MethodEntry* find_method(const std::string& name);
-/// Method names that are part of the product but not implemented yet in this build.
-const std::vector<std::string>& planned_methods();
 
 }  // namespace lamina::app

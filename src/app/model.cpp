@@ -78,7 +78,7 @@ void jitter_nodes(PointCloud& cloud, const io::Jitter& jitter, const geometry::G
 
 }  // namespace
 
-Model build_point_model_unlocated(const io::Case& c);
+Model build_point_model_unlocated(const io::Case& c, const ModelRequest& request);
 
 IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& cloud) {
   IndexList nodes;
@@ -129,18 +129,18 @@ InputError locate(const InputError& e, const io::Case& c) {
   return InputError(located);
 }
 
-Model build_point_model(const io::Case& c) {
+Model build_point_model(const io::Case& c, const ModelRequest& request) {
   try {
-    return build_point_model_unlocated(c);
+    return build_point_model_unlocated(c, request);
   } catch (const InputError& e) {
     throw locate(e, c);
   }
 }
 
-Model build_point_model_unlocated(const io::Case& c) {
+Model build_point_model_unlocated(const io::Case& c, const ModelRequest& request) {
   Model model;
   const auto& d = c.discretization;
-  if (d.elements || c.method == "mpm") {
+  if (d.elements || request.shell_mesh) {
     // shell methods: the mid-surface quadrilateral mesh; its nodes and edge sets are the cloud
     model.shell = geometry::generate_shell_mesh(c.geometry, d.elements.value_or(std::array<int, 2>{1, 1}));
     model.cloud.positions = model.shell->nodes;
@@ -163,11 +163,7 @@ Model build_point_model_unlocated(const io::Case& c) {
     const bool plate = g.type == geometry::GeometryType::plate;
     const Vec3 lower = plate ? Vec3(g.min.x(), g.min.y(), -0.5 * g.thickness) : g.min;
     const Vec3 upper = plate ? Vec3(g.max.x(), g.max.y(), 0.5 * g.thickness) : g.max;
-    // pd.surface_correction: plate puts the layers of a plate lattice at the Gauss points of the thickness
-    bool gauss_layers = false;
-    if (plate && c.method == "pd" && c.method_section.IsMap() && c.method_section["surface_correction"] &&
-        c.method_section["surface_correction"].IsScalar())
-      gauss_layers = c.method_section["surface_correction"].Scalar() == "plate";
+    const bool gauss_layers = plate && request.lattice_layers_at_gauss_points;
     model.cloud = pd::lattice_point_cloud(pd::make_cell_lattice(lower, upper, *d.spacing), plate, gauss_layers);
   } else if (d.nodes) {
     model.cloud = geometry::generate_volume_nodes(c.geometry, *d.nodes);

@@ -24,10 +24,17 @@ struct Model {
   std::vector<Probe> probes;              // resolved probes, in case order
 };
 
-/// Generate nodes from geometry + discretization.nodes (or, with discretization.elements or method
-/// mpm, the shell mid-surface mesh whose nodes become the cloud) (+ jitter, or a nodes file) and resolve
-/// all selections. Empty selections and unknown sets are input errors (exit 2).
-Model build_point_model(const io::Case& c);
+/// What a method asks of its discretised body beyond the case's keys (MethodOptions::model_request),
+/// so that the model builder never tests a method name.
+struct ModelRequest {
+  bool shell_mesh = false;                      // the mid-surface quadrilateral mesh is the body (mpm)
+  bool lattice_layers_at_gauss_points = false;  // a plate lattice's layers at the thickness' Gauss points (pd plate correction)
+};
+
+/// Generate nodes from geometry + discretization.nodes (or, with discretization.elements or a
+/// shell_mesh request, the shell mid-surface mesh whose nodes become the cloud) (+ jitter, or a nodes
+/// file) and resolve all selections. Empty selections and unknown sets are input errors (exit 2).
+Model build_point_model(const io::Case& c, const ModelRequest& request = {});
 
 /// Give the diagnostics that carry a key path but no file (generators, method set-up) the
 /// case file and the line:column of that key (or of its nearest ancestor), in line order.

@@ -23,6 +23,7 @@ struct MpmMethodOptions : MethodOptions {
   mpm::MpmOptions options;
   shell::ShellSection section;
   std::vector<MomentEntry> moments;
+  ModelRequest model_request() const override { return ModelRequest{true, false}; }  // the shell mesh
 };
 
 /// The case's ramp with its table's first column divided by `scale` (end_time of a dynamic run: the
@@ -222,7 +223,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
 }  // namespace
 
 MethodEntry mpm_method_entry() {
-  return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true},
+  return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true, {"shell"}},
                      "CPDI2 material point method with Belytschko-Tsay shell domains, explicit / quasi-static (seed 000)",
                      read_mpm, create_mpm, {"mpm.end_time"}};
 }

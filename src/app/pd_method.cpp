@@ -32,6 +32,10 @@ struct PdMethodOptions : MethodOptions {
   pd::BucklingOptions buckling;
   ImperfectionOptions imperfection;
   bool check_zero_energy = true;
+  /// surface_correction: plate puts the layers of a plate lattice at the Gauss points of the thickness.
+  ModelRequest model_request() const override {
+    return ModelRequest{false, body.surface_correction == pd::SurfaceCorrection::plate};
+  }
 };
 
 void read_imperfection(const io::NodeReader& r, ImperfectionOptions& o) {
@@ -61,7 +65,7 @@ void read_imperfection(const io::NodeReader& r, ImperfectionOptions& o) {
 
 std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& section) {
   auto o = std::make_unique<PdMethodOptions>();
-  io::NodeReader imperfection(c.imperfection, "imperfection", &section.sink());
+  io::NodeReader imperfection(c.resolved["imperfection"], "imperfection", &section.sink());
   read_imperfection(imperfection, o->imperfection);
   if (!section.defined()) return o;
   if (!section.expect_map()) return o;
@@ -353,7 +357,7 @@ std::unique_ptr<Analysis> create_pd(const io::Case& c, const Model& model, const
 }  // namespace
 
 MethodEntry pd_method_entry() {
-  return MethodEntry{io::MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true},
+  return MethodEntry{io::MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}},
                      "Linearized state-based peridynamics: ADR quasi-static, explicit, linear, buckling (seed 002)",
                      read_pd, create_pd, {"pd.explicit.end_time"}};
 }

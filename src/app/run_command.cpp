@@ -183,15 +183,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 namespace {
 
-/// The case keys of a method that is part of the product (PRODUCT.md section 5) but not
-/// registered in this build: read like the others, so that only the method line is an error.
-io::MethodKeys planned_method_keys(const std::string& name) {
-  if (name == "pd") return io::MethodKeys{name, {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}};
-  if (name == "mpm") return io::MethodKeys{name, {"elements", "grid"}, true, {"shell"}};
-  if (name == "mpfem") return io::MethodKeys{name, {"particles", "jitter"}, true};
-  return io::MethodKeys{name, {}, true};
-}
-
 std::string implemented_method_names() {
   std::string names;
   for (const auto& m : methods()) names += (names.empty() ? "" : ", ") + m.keys.method;
@@ -218,10 +209,7 @@ PreparedCase prepare(io::CaseReader& reader, const std::string& case_directory) 
 }  // namespace
 
 std::vector<io::MethodKeys> all_method_keys() {
-  std::vector<io::MethodKeys> keys = method_keys();
-  for (const auto& name : planned_methods())
-    if (!find_method(name)) keys.push_back(planned_method_keys(name));
-  return keys;
+  return method_keys();
 }
 
 PreparedCase prepare_case(const std::string& path, const std::vector<std::string>& overrides,
@@ -252,7 +240,7 @@ RunResult run_case(const RunOptions& options) {
   Model model;
   std::unique_ptr<Analysis> analysis;
   try {
-    model = build_point_model(c);
+    model = build_point_model(c, prepared.options ? prepared.options->model_request() : ModelRequest{});
     analysis = prepared.method->create(c, model, *prepared.options);
   } catch (const InputError& e) {
     result.exit_code = 2;
@@ -399,7 +387,8 @@ RunResult run_case(const RunOptions& options) {
 int check_case(const std::string& path, const std::vector<std::string>& overrides) {
   PreparedCase prepared = prepare_case(path, overrides);
   const io::Case& c = prepared.case_data;
-  Model model = build_point_model(c);  // resolves every selection: empty ones are errors
+  // resolves every selection: empty ones are errors
+  Model model = build_point_model(c, prepared.options ? prepared.options->model_request() : ModelRequest{});
   std::vector<std::string> warnings;
   try {
     // the method's set-up checks too (e.g. a traction selection without an edge), as `run` would do them

@@ -49,8 +49,7 @@ struct PreparedCase {
   std::unique_ptr<MethodOptions> options;
 };
 
-/// The case keys of every method name a case may give: those of this build, and the planned
-/// ones (PRODUCT.md section 5) so that their cases are read without false errors.
+/// The case keys of every method of this build (the registry's).
 std::vector<io::MethodKeys> all_method_keys();
 
 /// Read + validate everything that can be checked without running (throws InputError).

@@ -108,7 +108,6 @@ struct Case {
   std::vector<ProbeEntry> probes;
   OutputOptions output;
   YAML::Node method_section;   // the `<method>:` mapping (may be undefined)
-  YAML::Node imperfection;     // pd
   YAML::Node resolved;         // the whole document after --set overrides (for check / log)
   /// A case built in code (OMLL deck): key path -> line, column in `file` (io/omll_deck.hpp).
   std::map<std::string, std::pair<int, int>> source_positions;

@@ -620,8 +620,9 @@ Case CaseReader::read() {
     o.reject_unknown_keys();
   }
 
-  if (c.method == "pd") c.imperfection = root.child("imperfection").node();
-  if (c.method == "mpm") root.child("shell");  // the shell section, read with mpm: (app/mpm_method.cpp)
+  // the method's other top-level sections (mpm: shell, pd: imperfection) are read by its own reader
+  if (keys)
+    for (const auto& other : keys->other_sections) (void)root.child(other);
   if (keys) c.method_section = root.child(c.method).node();
   return c;
 }
