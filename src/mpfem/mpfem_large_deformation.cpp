@@ -144,13 +144,36 @@ Index MpfemAnalysis::changed_neighbourhoods(const Eigen::VectorXd& u, std::vecto
   ParticleLayout current = problem_.layout;
   for (Index p = 0; p < current.positions.cols(); ++p) current.positions.col(p) += u.segment<2>(2 * p);
   chosen = choose_neighbours(current, problem_.options.elements);
+  // a new neighbour set is taken only if its star is sound on the reference positions (where the element
+  // geometry is built): every triangle between consecutive neighbours either clearly positive (sine of
+  // the angle at the particle >= 0.1) or reflex / flat (skipped); at least one triangle
+  const Points2& X = problem_.layout.positions;
+  auto sound = [&](std::size_t p, const std::array<Index, 4>& set) {
+    int triangles = 0;
+    for (int k = 0; k < 4; ++k) {
+      const Index a = set[static_cast<std::size_t>(k)], b = set[static_cast<std::size_t>((k + 1) % 4)];
+      if (a < 0 || b < 0) continue;
+      const Vec2 da = X.col(a) - X.col(static_cast<Index>(p)), db = X.col(b) - X.col(static_cast<Index>(p));
+      const Real sine = (da.x() * db.y() - da.y() * db.x()) / (da.norm() * db.norm());
+      if (sine >= 0.1) ++triangles;
+      else if (sine > 0) return false;
+    }
+    return triangles > 0;
+  };
   Index changed = 0;
   for (std::size_t p = 0; p < chosen.size(); ++p) {
-    std::array<Index, 4> now = chosen[p], before{};
-    for (int k = 0; k < 4; ++k) before[static_cast<std::size_t>(k)] = discretization_.elements[p].nodes[static_cast<std::size_t>(k + 1)];
+    std::array<Index, 4> now = chosen[p], before{}, current{};
+    for (int k = 0; k < 4; ++k)
+      current[static_cast<std::size_t>(k)] = discretization_.elements[p].nodes[static_cast<std::size_t>(k + 1)];
+    before = current;
     std::sort(now.begin(), now.end());
     std::sort(before.begin(), before.end());
-    changed += now != before;
+    if (now == before) continue;
+    if (!sound(p, chosen[p])) {
+      chosen[p] = current;
+      continue;
+    }
+    ++changed;
   }
   return changed;
 }
@@ -173,6 +196,10 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
     if (!prescribed[static_cast<std::size_t>(i)]) free_id[static_cast<std::size_t>(i)] = free_count++;
   if (!f_.allFinite()) throw AnalysisError("mpfem: non-finite load vector; check the load expressions");
 
+  // the residual's round-off floor: 1e-12 x the force of a unit strain on one particle (E t h)
+  Real modulus = 0;
+  for (const auto& m : problem_.materials) modulus = std::max(modulus, m.E);
+  const Real round_off = 1e-12 * modulus * problem_.thickness * discretization_.typical_spacing;
   // Newton iterations at load factor `level` from u; false if not converged
   std::string failure;
   auto newton = [&](Eigen::VectorXd& u, Real level) {
@@ -180,6 +207,7 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
       if (prescribed[static_cast<std::size_t>(i)]) u[i] = level * u_prescribed[i];
     Eigen::VectorXd force;
     solve::SparseMatrix tangent;
+    Real last_correction = INFINITY;
     for (int iteration = 0; iteration <= options.max_iterations; ++iteration) {
       if (!internal_forces(u, force, &tangent, nullptr)) {
         failure = "a particle's deformation gradient has J <= 0 (the particles are turned inside out)";
@@ -193,7 +221,11 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
         else reference = std::max(reference, std::abs(force[i]));
       }
       const Real norm = residual.lpNorm<Eigen::Infinity>();
-      if (iteration > 0 && norm <= options.tolerance * std::max(reference, 1e-300)) return true;
+      // converged: the residual below tolerance x the force scale, or (loads so small that round-off in the
+      // stresses dominates the residual) a last correction at round-off level of the displacements
+      if (iteration > 0 && (norm <= std::max(options.tolerance * reference, round_off) ||
+                            last_correction <= 1e-4 * options.tolerance * u.lpNorm<Eigen::Infinity>()))
+        return true;
       if (iteration == options.max_iterations) {
         failure = fmt::format("Newton did not converge in {} iterations (residual {:.3g} x the largest force)",
                               options.max_iterations, norm / std::max(reference, 1e-300));
@@ -223,6 +255,7 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
         return false;
       }
       ++stats_.newton_iterations;
+      last_correction = du.lpNorm<Eigen::Infinity>();
       for (Index i = 0; i < 2 * n; ++i)
         if (free_id[static_cast<std::size_t>(i)] >= 0) u[i] += du[free_id[static_cast<std::size_t>(i)]];
     }
