@@ -1,6 +1,9 @@
 #pragma once
-// `method: mpfem` — moving particle finite element method for 2D linear elastostatics (seed 001):
+// `method: mpfem` — moving particle finite element method for 2D elastostatics (seed 001):
 // five-node particle elements, particle quadrature of eqs (4)-(6), essential conditions on particle dofs, CHOLMOD.
+// analysis large_deformation (mpfem_large_deformation.cpp, docs/mpfem.md section 9): total-Lagrangian
+// Newton over the same quadrature written as energy points (energy_points.hpp), neighbourhoods rebuilt
+// from the current positions.
 //
 // Stiffness with particle_strain: cell (default on grid particle sets; tributary_cells.hpp) or voronoi
 // (default on other particle sets of convex bodies; Voronoi cells clipped to the hull, voronoi_cells.hpp):
