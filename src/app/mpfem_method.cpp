@@ -45,6 +45,20 @@ std::unique_ptr<MethodOptions> read_mpfem(const io::Case&, const io::NodeReader&
                               ? mpfem::TractionQuadrature::particle
                               : mpfem::TractionQuadrature::gauss;
   result->refine = static_cast<int>(section.integer("refine", 1, 1, 64));
+  if (section.word("analysis", {"linear_static", "large_deformation"}, "linear_static") == "large_deformation")
+    o.analysis = mpfem::MpfemAnalysisKind::large_deformation;
+  io::NodeReader large = section.child("large_deformation");
+  if (large.defined() && large.expect_map()) {
+    if (o.analysis != mpfem::MpfemAnalysisKind::large_deformation)
+      large.error("no large_deformation: settings without analysis: large_deformation", "large_deformation settings");
+    auto& l = o.large_deformation;
+    l.increments = static_cast<int>(large.integer("increments", 10, 1, 100000));
+    l.tolerance = large.real("tolerance", 1e-8, 0.0, 1e-2, true);
+    l.max_iterations = static_cast<int>(large.integer("max_iterations", 25, 1, 1000));
+    l.bisections = static_cast<int>(large.integer("bisections", 6, 0, 30));
+    l.rebuild = large.boolean("rebuild", true);
+    large.reject_unknown_keys();
+  }
   io::NodeReader hole = section.child("hole");
   if (hole.defined() && hole.expect_map()) {
     HoleOptions h;
@@ -249,11 +263,18 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
   for (std::size_t i = 0; i < c.materials.size(); ++i) {
     const auto& m = c.materials[i];
     io::SourceLocation where{c.file, 0, 0, fmt::format("materials.{}", i)};
-    if (m.spec.model != material::MaterialModel::linear_elastic) {
-      problems.push_back(at(where, ".model", "linear_elastic (mpfem is a linear analysis)", "another model"));
+    const bool large = p.options.analysis == mpfem::MpfemAnalysisKind::large_deformation;
+    if (m.spec.model == material::MaterialModel::neo_hookean && !large) {
+      problems.push_back(at(where, ".model", "linear_elastic (neo_hookean needs mpfem.analysis: large_deformation)",
+                            "neo_hookean"));
+      continue;
+    }
+    if (m.spec.model != material::MaterialModel::linear_elastic && m.spec.model != material::MaterialModel::neo_hookean) {
+      problems.push_back(at(where, ".model", "linear_elastic or neo_hookean (mpfem is elastic)", "another model"));
       continue;
     }
     p.materials.push_back(material::LinearElastic{m.spec.E, m.spec.nu});
+    p.material_models.push_back(m.spec.model);
     const int id = static_cast<int>(p.materials.size() - 1);
     if (m.select) {
       for (Index q : model->material_nodes[i])
@@ -348,7 +369,7 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
 
 MethodEntry mpfem_method_entry() {
   return MethodEntry{io::MethodKeys{"mpfem", {"particles", "jitter"}, true},
-                     "moving particle finite element method, 2D linear elastostatics (seed 001)", read_mpfem, create_mpfem};
+                     "moving particle finite element method, 2D elastostatics, linear and large deformation (seed 001)", read_mpfem, create_mpfem};
 }
 
 }  // namespace lamina::app

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "mpfem/gradient_list.hpp"
 #include "mpfem/strain_fit.hpp"
 
 namespace lamina::mpfem {
@@ -111,7 +112,19 @@ MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes)
   if (problem_.materials.empty()) throw InputError("materials", "at least one linear_elastic material", "none");
   if (static_cast<Index>(problem_.material_of_particle.size()) != n)
     problem_.material_of_particle.assign(static_cast<std::size_t>(n), 0);
-  for (const auto& m : problem_.materials) materials_.push_back(PlaneMaterial{m, problem_.options.plane});
+  const bool large = problem_.options.analysis == MpfemAnalysisKind::large_deformation;
+  for (std::size_t i = 0; i < problem_.materials.size(); ++i) {
+    const auto& m = problem_.materials[i];
+    materials_.push_back(PlaneMaterial{m, problem_.options.plane});
+    const bool neo = i < problem_.material_models.size() && problem_.material_models[i] == material::MaterialModel::neo_hookean;
+    if (neo && !large)
+      throw InputError(fmt::format("materials.{}.model", i), "linear_elastic (or mpfem.analysis: large_deformation)",
+                       "neo_hookean with mpfem.analysis: linear_static");
+    hyperelastic_.push_back(material::Hyperelastic::from(
+        neo ? material::HyperelasticKind::neo_hookean : material::HyperelasticKind::saint_venant_kirchhoff, m));
+  }
+  if (large && problem_.options.element == ElementKind::t3)
+    throw InputError("mpfem.element", "element: five_node for mpfem.analysis: large_deformation", "element: t3");
   if (!(problem_.thickness > 0) || !std::isfinite(problem_.thickness))
     throw InputError("geometry", "a positive z extent (the out-of-plane thickness)", fmt::format("{}", problem_.thickness));
   if (problem_.options.element == ElementKind::t3 && !problem_.layout.grid)
@@ -166,6 +179,7 @@ void MpfemAnalysis::rebuild(const Points2& positions) {
   problem_.options.body_area.reset();  // the reference body's area no longer applies to moved particles
   discretization_ = build_particle_elements(problem_.layout, problem_.options.elements);
   if (cell_strain_) build_cell_operators();
+  energy_points_.clear();
   solved_ = false;
 }
 
@@ -250,6 +264,7 @@ void MpfemAnalysis::build_cell_operators() {
   discretization_.area_weight = cells_.area;
   cell_strain_ops_.assign(static_cast<std::size_t>(n), {});
   strain_gradient_.assign(static_cast<std::size_t>(n), {});
+  strain_gradient_vectors_.assign(static_cast<std::size_t>(n), {});
   for (Index p = 0; p < n; ++p)
     for (const auto& [q, g] : cells_.mean_gradient[static_cast<std::size_t>(p)])
       cell_strain_ops_[static_cast<std::size_t>(p)].emplace_back(q, gradient_block(g));
@@ -281,6 +296,8 @@ void MpfemAnalysis::build_cell_operators() {
         const Index j = e.nodes[static_cast<std::size_t>(a)];
         if (j < 0 || d(axis, a) == 0.0) continue;
         for (const auto& [q, block] : cell_strain_ops_[static_cast<std::size_t>(j)]) add_block(g, q, d(axis, a) * block);
+        auto& gv = strain_gradient_vectors_[static_cast<std::size_t>(p)][static_cast<std::size_t>(axis)];
+        for (const auto& [q, v] : cells_.mean_gradient[static_cast<std::size_t>(j)]) add_gradient(gv, q, d(axis, a) * v);
       }
     }
   }
@@ -640,9 +657,12 @@ void MpfemAnalysis::compute_errors() {
   errors_.max_stress = max_s > 0 ? max_s_error / max_s : max_s_error;
 }
 
-void MpfemAnalysis::solve() {
+void MpfemAnalysis::solve() { solve_with(nullptr); }
+
+void MpfemAnalysis::solve_with(OutputSink* sink) {
   const auto start = Clock::now();
-  assemble_and_solve();
+  if (problem_.options.analysis == MpfemAnalysisKind::large_deformation) solve_large_deformation(sink);
+  else assemble_and_solve();
   compute_errors();
   solved_ = true;
   timings_["total_s"] = seconds_since(start) + timings_["setup_s"];
@@ -650,7 +670,7 @@ void MpfemAnalysis::solve() {
 
 void MpfemAnalysis::run(OutputSink& sink) {
   sink.progress(0.0, "assembling");
-  solve();
+  solve_with(&sink);
   sink.progress(1.0, "solved");
   sink.output_point(1, 1.0, 1.0);
 }
@@ -741,6 +761,13 @@ Real MpfemAnalysis::probe(const Probe& requested) const {
 std::map<std::string, Real> MpfemAnalysis::builtin_probes() const {
   std::map<std::string, Real> result;
   result["h"] = discretization_.typical_spacing;
+  if (problem_.options.analysis == MpfemAnalysisKind::large_deformation) {
+    result["neighbourhood_rebuilds"] = static_cast<Real>(stats_.rebuilds);
+    result["rebuilt_particles"] = static_cast<Real>(stats_.rebuilt_particles);
+    result["newton_iterations"] = static_cast<Real>(stats_.newton_iterations);
+    result["load_increments"] = static_cast<Real>(stats_.increments);
+    result["increment_cuts"] = static_cast<Real>(stats_.cuts);
+  }
   if (problem_.options.exact_displacement) {
     result["err_displacement"] = errors_.max_displacement;
     result["err_stress"] = errors_.max_stress;
@@ -785,7 +812,7 @@ RunCounts MpfemAnalysis::counts() const {
   RunCounts c;
   c.nodes = problem_.layout.positions.cols();
   c.dofs = 2 * c.nodes;
-  c.steps = 1;
+  c.steps = problem_.options.analysis == MpfemAnalysisKind::large_deformation ? std::max<Index>(1, stats_.increments) : 1;
   return c;
 }
 

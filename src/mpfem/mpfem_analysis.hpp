@@ -1,6 +1,9 @@
 #pragma once
-// `method: mpfem` — moving particle finite element method for 2D linear elastostatics (seed 001):
+// `method: mpfem` — moving particle finite element method for 2D elastostatics (seed 001):
 // five-node particle elements, particle quadrature of eqs (4)-(6), essential conditions on particle dofs, CHOLMOD.
+// analysis large_deformation (mpfem_large_deformation.cpp, docs/mpfem.md section 9): total-Lagrangian
+// Newton over the same quadrature written as energy points (energy_points.hpp), neighbourhoods rebuilt
+// from the current positions.
 //
 // Stiffness with particle_strain: cell (default on grid particle sets; tributary_cells.hpp) or voronoi
 // (default on other particle sets of convex bodies; Voronoi cells clipped to the hull, voronoi_cells.hpp):
@@ -37,6 +40,8 @@
 #include <vector>
 
 #include "core/analysis.hpp"
+#include "material/hyperelastic.hpp"
+#include "mpfem/energy_points.hpp"
 #include "mpfem/mpfem_problem.hpp"
 #include "mpfem/particle_elements.hpp"
 #include "mpfem/tributary_cells.hpp"
@@ -60,6 +65,16 @@ class MpfemAnalysis : public Analysis {
 
   /// Assemble and solve without an output sink (tests).
   void solve();
+  /// Counters of the large-deformation analysis (summary.json builtin probes).
+  struct LargeDeformationStats {
+    Index increments = 0, newton_iterations = 0, cuts = 0, rebuilds = 0, rebuilt_particles = 0;
+  };
+  const LargeDeformationStats& large_deformation_stats() const { return stats_; }
+  /// Internal force vector and (optionally) tangent stiffness (full storage) of the large-deformation
+  /// energy at particle displacements u (2N); false if a deformation gradient has J <= 0. Tests.
+  bool internal_forces(const Eigen::VectorXd& u, Eigen::VectorXd& force, solve::SparseMatrix* tangent, Real* energy) const;
+  /// The energy points of the current elements (done by the large-deformation solve; tests).
+  void build_energy_points();
   /// Re-discretise: rebuild the five-node elements and weights from new particle positions.
   void rebuild(const Points2& positions);
 
@@ -83,6 +98,11 @@ class MpfemAnalysis : public Analysis {
 
  private:
   void assemble_and_solve();
+  void solve_with(OutputSink* sink);
+  void solve_large_deformation(OutputSink* sink);  // mpfem_large_deformation.cpp
+  /// Particles whose neighbours chosen on the current positions differ from their element's.
+  Index changed_neighbourhoods(const Eigen::VectorXd& u, std::vector<std::array<Index, 4>>& chosen) const;
+  void large_deformation_results();
   void build_cell_operators();
   /// Sparse 3 x 2N strain operator: (particle, 3 x 2 block) pairs.
   using StrainBlocks = std::vector<std::pair<Index, Eigen::Matrix<Real, 3, 2>>>;
@@ -108,6 +128,10 @@ class MpfemAnalysis : public Analysis {
   TributaryCells cells_;
   std::vector<StrainBlocks> cell_strain_ops_;                // B_I (cell mean)
   std::vector<std::array<StrainBlocks, 2>> strain_gradient_;  // G_x,I and G_y,I
+  std::vector<std::array<GradientList, 2>> strain_gradient_vectors_;  // the same as gradient lists
+  std::vector<std::vector<EnergyPoint>> energy_points_;    // large deformation (energy_points.hpp)
+  std::vector<material::Hyperelastic> hyperelastic_;      // per material
+  LargeDeformationStats stats_;
   std::vector<PlaneMaterial> materials_;
   solve::SparseMatrix stiffness_;  // full (both triangles), 2N x 2N
   Eigen::VectorXd f_, u_, reactions_;

@@ -9,6 +9,7 @@
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
 #include "material/linear_elastic.hpp"
+#include "material/material_spec.hpp"
 #include "mpfem/particle_elements.hpp"
 
 namespace lamina::mpfem {
@@ -32,7 +33,21 @@ enum class TractionQuadrature { gauss, particle };
 ///     term; any particle set of a convex body, or a mesh's nodes.
 enum class ParticleStrain { cell, star, voronoi };
 
+/// linear_static: seed eqs (4)-(6); large_deformation: total-Lagrangian Newton on load increments
+/// with the elements' neighbourhoods rebuilt from the current positions (docs/mpfem.md section 9).
+enum class MpfemAnalysisKind { linear_static, large_deformation };
+
+struct LargeDeformationOptions {
+  int increments = 10;        // equal load increments (dead loads and prescribed displacements scaled)
+  Real tolerance = 1e-8;      // Newton: |residual| <= tolerance x max(|external + reaction forces|)
+  int max_iterations = 25;    // Newton iterations per increment before the increment is cut
+  int bisections = 6;         // halvings of an increment before the run stops (exit 3)
+  bool rebuild = true;        // rebuild the neighbourhoods from the current positions when they change
+};
+
 struct MpfemOptions {
+  MpfemAnalysisKind analysis = MpfemAnalysisKind::linear_static;
+  LargeDeformationOptions large_deformation;
   PlaneKind plane = PlaneKind::stress;
   ElementKind element = ElementKind::five_node;
   ElementOptions elements;
@@ -76,6 +91,9 @@ struct MpfemProblem {
   Real thickness = 1.0;
   Real z_mid = 0.5;                             // z of the particles in outputs
   std::vector<material::LinearElastic> materials;
+  /// per material: neo_hookean (large_deformation only) or linear_elastic (Saint Venant-Kirchhoff
+  /// in large_deformation); empty = all linear_elastic
+  std::vector<material::MaterialModel> material_models;
   std::vector<int> material_of_particle;        // index into materials, per particle
   std::vector<PrescribedDof> prescribed;        // essential conditions on particle dofs
   std::vector<MpfemLoad> loads;

@@ -111,7 +111,24 @@ Eigen::Matrix<Real, 2, 3> triangle_gradient(const Vec2& p0, const Vec2& p1, cons
   return g / twice;
 }
 
-ParticleDiscretization build_particle_elements(const ParticleLayout& layout, const ElementOptions& options) {
+std::vector<std::array<Index, 4>> choose_neighbours(const ParticleLayout& layout, const ElementOptions& options) {
+  const Points2& x = layout.positions;
+  const Index n = x.cols();
+  if (options.rule == NeighbourRule::logical_grid) {
+    if (!layout.grid)
+      throw InputError("mpfem.neighbours", "neighbours: sectors for particle sets without a generator grid",
+                       "neighbours: grid");
+    return grid_neighbours(*layout.grid, n);
+  }
+  const Real h = std::sqrt(bounding_area(x) / static_cast<Real>(n));
+  ParticleBins bins(x, h);
+  const Real reach = options.max_neighbour_distance * median_nearest_distance(x, bins, h);
+  ParticleBins search(x, std::max(reach / 2, 1e-3 * h));
+  return sector_neighbours(x, search, reach);
+}
+
+ParticleDiscretization build_particle_elements(const ParticleLayout& layout, const ElementOptions& options,
+                                               const std::vector<std::array<Index, 4>>* given) {
   const Points2& x = layout.positions;
   const Index n = x.cols();
   if (n < 3) throw InputError("discretization.particles", "at least 3 particles", fmt::format("{}", n));
@@ -137,17 +154,8 @@ ParticleDiscretization build_particle_elements(const ParticleLayout& layout, con
                                    "particles separate sets)", first, second, point_text(x.col(first))));
   }
 
-  std::vector<std::array<Index, 4>> neighbours;
-  if (options.rule == NeighbourRule::logical_grid) {
-    if (!layout.grid)
-      throw InputError("mpfem.neighbours", "neighbours: sectors for particle sets without a generator grid",
-                       "neighbours: grid");
-    neighbours = grid_neighbours(*layout.grid, n);
-  } else {
-    const Real reach = options.max_neighbour_distance * median_nearest_distance(x, bins, h);
-    ParticleBins search(x, std::max(reach / 2, 1e-3 * h));
-    neighbours = sector_neighbours(x, search, reach);
-  }
+  const std::vector<std::array<Index, 4>> neighbours = given ? *given : choose_neighbours(layout, options);
+  const bool skip_flat = options.rule == NeighbourRule::sectors || given != nullptr;
 
   d.elements.resize(static_cast<std::size_t>(n));
   std::vector<std::string> problems(static_cast<std::size_t>(n));
@@ -166,7 +174,7 @@ ParticleDiscretization build_particle_elements(const ParticleLayout& layout, con
       if (ja < 0 || jb < 0) continue;
       Real signed_area = 0;
       const Eigen::Matrix<Real, 2, 3> g = triangle_gradient(x.col(p), x.col(ja), x.col(jb), signed_area);
-      if (options.rule == NeighbourRule::sectors) {
+      if (skip_flat) {
         // skip reflex or flat gaps (a concave boundary, or neighbours on a straight line)
         if (signed_area <= 1e-10 * h * h) continue;
       } else if (signed_area <= 1e-10 * h * h) {

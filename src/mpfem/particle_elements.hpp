@@ -94,7 +94,14 @@ struct ParticleDiscretization {
 /// Builds the five-node elements from the current positions. Throws lamina::InputError
 /// (key "discretization.particles") for coincident particles or particles whose element has
 /// no area (too few neighbours) and for inverted (tangled) elements.
-ParticleDiscretization build_particle_elements(const ParticleLayout& layout, const ElementOptions& options);
+/// `neighbours` (optional): use these E N W S neighbours instead of the rule's choice on
+/// layout.positions (the large-deformation analysis: chosen on the current positions, element
+/// geometry on the reference positions; reflex or flat star triangles are skipped as with sectors).
+ParticleDiscretization build_particle_elements(const ParticleLayout& layout, const ElementOptions& options,
+                                               const std::vector<std::array<Index, 4>>* neighbours = nullptr);
+
+/// The neighbours E N W S (-1 absent) the rule chooses on layout.positions.
+std::vector<std::array<Index, 4>> choose_neighbours(const ParticleLayout& layout, const ElementOptions& options);
 
 /// One shape function value at a point: particle, phi, grad phi.
 struct ShapeValue {
