@@ -486,10 +486,22 @@ Real MpmAnalysis::advance(Real load) {
       int2 += f_int_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
               m_int_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
     }
+    if (scaled_ && o.adaptive_damping && c > 0) {
+      // adaptive damping: the damping force c m v joins the imbalance, so that a node swinging through
+      // equilibrium (zero residual at full velocity) does not end the level
+      for (Index i = 0; i < n; ++i)
+        r2 += (c * dyn_mass_[i]) * (c * dyn_mass_[i]) * v_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+              (c * dyn_inertia_[i]) * (c * dyn_inertia_[i]) * omega_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+    }
     const Real scale = std::max({ext2, int2, std::numeric_limits<Real>::min()});
     residual_ratio_ = std::sqrt(r2 / scale);
   }
-  if (c > 0) {
+  // adaptive damping is central (seed 002 eq (7)): v^{n+1/2} = ((1 - c dt/2) v^{n-1/2} + dt f / m) / (1 + c dt/2),
+  // applied in the grid update and the rotation update (an explicit -c m v^{n-1/2} would shrink the
+  // stable step to omega^2 dt^2 < 4 - 2 c dt)
+  const bool central_damping = scaled_ && o.adaptive_damping;
+  const Real keep = central_damping ? 1.0 - 0.5 * c * dt : 1.0, divide = central_damping ? 1.0 + 0.5 * c * dt : 1.0;
+  if (c > 0 && !central_damping) {
     for (Index i = 0; i < n; ++i) {
       f_net_.col(i) -= c * dyn_mass_[i] * v_.col(i);
       m_net.col(i) -= c * dyn_inertia_[i] * omega_.col(i);
@@ -520,8 +532,13 @@ Real MpmAnalysis::advance(Real load) {
       for (int a = 0; a < 3; ++a) {
         const Real m = grid_mass(a, s);
         if (m > 0) {
-          grid_acceleration(a, s) = grid_force(a, s) / m;
-          grid_velocity(a, s) = (grid_momentum(a, s) + dt * grid_force(a, s)) / m;
+          if (central_damping) {
+            grid_velocity(a, s) = (keep * grid_momentum(a, s) + dt * grid_force(a, s)) / (divide * m);
+            grid_acceleration(a, s) = (grid_velocity(a, s) - grid_momentum(a, s) / m) / dt;
+          } else {
+            grid_acceleration(a, s) = grid_force(a, s) / m;
+            grid_velocity(a, s) = (grid_momentum(a, s) + dt * grid_force(a, s)) / m;
+          }
         } else {
           grid_acceleration(a, s) = grid_velocity(a, s) = 0.0;  // no free mass: fixed grid node (eq (7))
         }
@@ -546,7 +563,10 @@ Real MpmAnalysis::advance(Real load) {
         } else {
           v_(a, i) = vpos_(a, i) = 0.0;
         }
-        omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
+        if (central_damping)
+          omega_(a, i) = rotation_free_(a, i) > 0 ? (keep * omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i]) / divide : 0.0;
+        else
+          omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
       }
     }
   }

@@ -67,36 +67,6 @@ TEST(mpm_Cases, LinearCantileverMatchesBeamTheory) {
   EXPECT_NEAR(w, exact, 0.01 * exact);
 }
 
-double summary_value(const std::string& name, const std::string& key) {
-  std::ifstream summary(fs::temp_directory_path() / ("lamina_mpm_test_" + name) / "out" / "summary.json");
-  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
-  const auto at = text.find("\"" + key + "\":");
-  if (at == std::string::npos) return NAN;
-  return std::stod(text.substr(at + key.size() + 3));
-}
-
-// Mass scaling (the quasi_static default) and the physical-mass path reach the same static answer;
-// the fictitious masses (Gershgorin bound) keep the run stable at dt = 1 and the energy balance closed.
-TEST(mpm_Cases, MassScaledAndPhysicalQuasiStaticAgree) {
-  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
-  const Outcome scaled = run_case("scaled", kStrip);
-  ASSERT_EQ(scaled.exit_code, 0) << scaled.output;
-  const Outcome physical = run_case("physical", kStrip, "--set mpm.mass_scaling=physical");
-  ASSERT_EQ(physical.exit_code, 0) << physical.output;
-  EXPECT_NEAR(summary_value("scaled", "w_tip"), exact, 0.01 * exact);
-  EXPECT_NEAR(summary_value("physical", "w_tip"), exact, 0.01 * exact);
-  EXPECT_EQ(summary_value("scaled", "time_step"), 1.0);
-  EXPECT_NEAR(summary_value("scaled", "energy_ratio"), 1.0, 0.05);
-}
-
-TEST(mpm_Cases, AdaptiveDampingNeedsMassScaling) {
-  const Outcome o = run_case("adaptive_physical", kStrip, "--set mpm.mass_scaling=physical --set mpm.damping.adaptive=true", true);
-  EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find("mass_scaling"), std::string::npos) << o.output;
-  const Outcome bad = run_case("mass_scaling_word", kStrip, "--set mpm.mass_scaling=fictitious", true);
-  EXPECT_EQ(bad.exit_code, 2) << bad.output;
-}
-
 TEST(mpm_Cases, DegenerateElementsAreRejected) {
   // a sphere cap without a polar hole has quadrilaterals with the pole node repeated
   const std::string yaml = R"(
@@ -134,6 +104,28 @@ double summary_value(const std::string& name, const std::string& key) {
   const auto at = text.find("\"" + key + "\":");
   if (at == std::string::npos) return std::nan("");
   return std::stod(text.substr(at + key.size() + 3));
+}
+
+// Mass scaling (mpm.mass_scaling: stiffness) and the physical-mass default reach the same static answer;
+// the fictitious masses (Gershgorin bound) keep the run stable at dt = 1 and the energy balance closed.
+TEST(mpm_Cases, MassScaledAndPhysicalQuasiStaticAgree) {
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  const Outcome scaled = run_case("scaled", kStrip, "--set mpm.mass_scaling=stiffness");
+  ASSERT_EQ(scaled.exit_code, 0) << scaled.output;
+  const Outcome physical = run_case("physical", kStrip);
+  ASSERT_EQ(physical.exit_code, 0) << physical.output;
+  EXPECT_NEAR(summary_value("scaled", "w_tip"), exact, 0.01 * exact);
+  EXPECT_NEAR(summary_value("physical", "w_tip"), exact, 0.01 * exact);
+  EXPECT_EQ(summary_value("scaled", "time_step"), 1.0);
+  EXPECT_NEAR(summary_value("scaled", "energy_ratio"), 1.0, 0.05);
+}
+
+TEST(mpm_Cases, AdaptiveDampingNeedsMassScaling) {
+  const Outcome o = run_case("adaptive_physical", kStrip, "--set mpm.damping.adaptive=true", true);
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("mass_scaling"), std::string::npos) << o.output;
+  const Outcome bad = run_case("mass_scaling_word", kStrip, "--set mpm.mass_scaling=fictitious", true);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
 }
 
 TEST(mpm_Cases, BendingHourglassCoefficientIsReadAndRangeChecked) {
