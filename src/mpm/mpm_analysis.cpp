@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "mpm/mass_scaling.hpp"
 
 namespace lamina::mpm {
 
@@ -172,64 +173,8 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
 
 void MpmAnalysis::compute_fictitious_masses() {
   StageTimer timer(stage_seconds_, "mass_scaling");
-  const ShellMesh& mesh = problem_.mesh;
-  const Index e_count = mesh.element_count(), n = x_.cols();
-  const int stress_size = element_->stress_size();
-  using Vec24 = Eigen::Matrix<Real, 24, 1>;
-  Eigen::Matrix<Real, 24, Eigen::Dynamic> row_sums(24, e_count);
-#pragma omp parallel for schedule(static) if (e_count > 64)
-  for (Index e = 0; e < e_count; ++e) {
-    shell::NodeMatrix x;
-    for (int a = 0; a < 4; ++a) x.col(a) = x_.col(mesh.quads(a, e));
-    std::vector<Real> stress(static_cast<std::size_t>(stress_size));
-    std::array<Real, shell::BelytschkoTsayShell::kHourglassSize> hourglass{};
-    // nodal forces and moments after a step of dt = 1 with velocities v, w from the current state
-    // (at the mid-step configuration x + v / 2 of that step, as compute_internal_forces does: the
-    // difference then holds the change of the corotational frame, the geometric stiffness)
-    auto forces = [&](const shell::NodeMatrix& v, const shell::NodeMatrix& w) {
-      std::copy(stress_.col(e).data(), stress_.col(e).data() + stress_size, stress.begin());
-      std::copy(hourglass_.col(e).data(), hourglass_.col(e).data() + hourglass.size(), hourglass.begin());
-      Real h = thickness_[e];
-      const shell::NodeMatrix x_mid = x + 0.5 * v;
-      const shell::ShellElementResult r = element_->update(x_mid, v, w, 1.0, stress.data(), hourglass.data(), h);
-      Vec24 f;
-      f.head<12>() = Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.force.data());
-      f.tail<12>() = Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.moment.data());
-      return f;
-    };
-    const shell::NodeMatrix zero = shell::NodeMatrix::Zero();
-    const Vec24 f0 = forces(zero, zero);
-    const Real size = std::max({(x.col(2) - x.col(0)).norm(), (x.col(3) - x.col(1)).norm(), 1e-300});
-    Vec24 sum = Vec24::Zero();
-    for (int j = 0; j < 24; ++j) {  // column j of the tangent; |K_ij| summed into row i
-      shell::NodeMatrix v = zero, w = zero;
-      const Real eps = j < 12 ? 1e-6 * size : 1e-6;
-      (j < 12 ? v : w)(j % 3, (j % 12) / 3) = eps;
-      sum += ((forces(v, w) - f0) / eps).cwiseAbs();
-    }
-    row_sums.col(e) = sum;
-  }
-  // node rows: the sum over the elements at the node (an upper bound of the assembled row sum), the
-  // largest of the three components (one mass per node, as the grid transfers need)
-  constexpr Real kSafety = 1.5;  // the tangent stiffens within a refresh interval (membrane stress, rotation)
-  Real largest_mass = 0, largest_inertia = 0;
-  for (Index i = 0; i < n; ++i) {
-    Vec3 t = Vec3::Zero(), r = Vec3::Zero();
-    for (Index k = incidence_begin_[static_cast<std::size_t>(i)]; k < incidence_begin_[static_cast<std::size_t>(i + 1)]; ++k) {
-      const Index entry = incidence_[static_cast<std::size_t>(k)], e = entry / 4;
-      const int a = static_cast<int>(entry % 4);
-      t += row_sums.block<3, 1>(3 * a, e);
-      r += row_sums.block<3, 1>(12 + 3 * a, e);
-    }
-    dyn_mass_[i] = 0.25 * kSafety * t.maxCoeff();
-    dyn_inertia_[i] = 0.25 * kSafety * r.maxCoeff();
-    largest_mass = std::max(largest_mass, dyn_mass_[i]);
-    largest_inertia = std::max(largest_inertia, dyn_inertia_[i]);
-  }
-  for (Index i = 0; i < n; ++i) {
-    dyn_mass_[i] = std::max(dyn_mass_[i], 1e-12 * largest_mass + std::numeric_limits<Real>::min());
-    dyn_inertia_[i] = std::max(dyn_inertia_[i], 1e-12 * largest_inertia + std::numeric_limits<Real>::min());
-  }
+  stiffness_proportional_masses(*element_, problem_.mesh, x_, stress_, hourglass_, thickness_, incidence_begin_, incidence_,
+                                dyn_mass_, dyn_inertia_);
   node_mass_.resize(3, 0);  // the grid's copy is rebuilt from the new masses
   masses_age_ = 0;
   masses_stale_ = false;

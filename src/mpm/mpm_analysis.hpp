@@ -6,7 +6,7 @@
 //  1. element stage: every BT domain updates its stresses with the node velocities that moved it
 //     to x^n and returns nodal forces/moments (eqs (17)-(37)); nodes gather them (no atomics).
 //  2. time step: dt = min(shell_safety * min_e L_e / c, alpha * cell / (c_dil + max |v_i|)) (eqs (38)-(40));
-//     mass-scaled quasi-static (the default): dt = 1 with fictitious masses m_i = s/4 sum_j |K_ij| from
+//     mass-scaled quasi-static (mpm.mass_scaling: stiffness): dt = 1 with fictitious masses m_i = s/4 sum_j |K_ij| from
 //     the element tangents (seed 002 eq (5)), refreshed every level and every 1000 steps.
 //  3. external loads at the load factor / time; damping forces (mass-scaled: adaptive dynamic
 //     relaxation, c = 2 sqrt(u^T K u / u^T M u) on the level's increment, seed 002 eqs (6)-(7)); the residual.
