@@ -88,11 +88,21 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
       if (ts.has("fixed")) o.fixed_time_step = ts.real("fixed", std::nullopt, 0.0, INFINITY, true);
       ts.reject_unknown_keys();
     }
+    // quasi-static: the physical masses (default) or fictitious stiffness-proportional ones; dynamic: physical
+    const bool quasi_static = o.analysis == mpm::MpmOptions::Kind::quasi_static;
+    const bool stiffness_mass = section.word("mass_scaling", {"physical", "stiffness"}, "physical") == "stiffness";
+    o.mass_scaling = quasi_static && stiffness_mass;
+    // with mass scaling: adaptive damping by default; kinetic damping is the default with physical mass
+    kinetic_default = quasi_static && !o.mass_scaling;
     o.kinetic_damping = kinetic_default;
+    o.adaptive_damping = o.mass_scaling;
     io::NodeReader damping = section.child("damping");
     if (damping.defined() && damping.expect_map()) {
       o.mass_damping = damping.real("mass", 0.0, 0.0);
       o.kinetic_damping = damping.boolean("kinetic", kinetic_default);
+      if (o.mass_scaling) o.adaptive_damping = damping.boolean("adaptive", !o.kinetic_damping && !(o.mass_damping > 0));
+      else if (damping.has("adaptive") && damping.boolean("adaptive", false))
+        damping.child("adaptive").error("adaptive damping needs the fictitious masses of mpm.mass_scaling: stiffness (quasi_static)");
       damping.reject_unknown_keys();
     }
     io::NodeReader moments = section.child("moments");

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "mpm/mass_scaling.hpp"
 
 namespace lamina::mpm {
 
@@ -23,6 +24,9 @@ class StageTimer {
   const char* name_;
   double start_;
 };
+
+// mass scaling: the fictitious masses are recomputed from the current tangent this often (and at each level)
+constexpr Index kMassRefreshSteps = 1000;
 
 Real field_value(const geometry::ScalarField& f, const geometry::Expression* e, const Vec3& x, Real t) {
   return f.is_constant() ? f.constant : e->evaluate(x, t);
@@ -138,7 +142,52 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   element_force_ = element_moment_ = Eigen::Matrix<Real, 12, Eigen::Dynamic>::Zero(12, e_count);
   grid_.locate(x_);
   prepare_loads();
-  energy_.kinetic = energy_.initial_kinetic = 0.5 * (v_.colwise().squaredNorm() * mass_)(0);
+  dyn_mass_ = mass_;
+  dyn_inertia_ = inertia_;
+  scaled_ = o.analysis == MpmOptions::Kind::quasi_static && o.mass_scaling;
+  if (scaled_) {
+    level_start_ = x_;
+    theta_ = PointMatrix::Zero(3, n);
+    f_int_previous_ = m_int_previous_ = Eigen::Matrix3Xd::Zero(3, n);
+  }
+  energy_.kinetic = energy_.initial_kinetic = 0.5 * (v_.colwise().squaredNorm() * dyn_mass_)(0);
+}
+
+void MpmAnalysis::compute_fictitious_masses() {
+  StageTimer timer(stage_seconds_, "mass_scaling");
+  stiffness_proportional_masses(*element_, problem_.mesh, x_, stress_, hourglass_, thickness_, incidence_begin_, incidence_,
+                                dyn_mass_, dyn_inertia_);
+  node_mass_.resize(3, 0);  // the grid's copy is rebuilt from the new masses
+  masses_age_ = 0;
+  masses_stale_ = false;
+}
+
+Real MpmAnalysis::adaptive_damping_coefficient() const {
+  // u: the increment since the level started; local stiffness k_d = (f_d^n - f_d^{n-1}) / (m_d dt v_d^{n-1/2})
+  const Index n = x_.cols();
+  Real numerator = 0, denominator = 0;
+  for (Index i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      if (free_(a, i) > 0) {
+        const Real u = x_(a, i) - level_start_(a, i), v = vpos_(a, i);
+        denominator += u * u;
+        if (v != 0) numerator += u * u * (f_int_(a, i) - f_int_previous_(a, i)) / (dyn_mass_[i] * dt_previous_ * v);
+      }
+      if (rotation_free_(a, i) > 0) {
+        const Real u = theta_(a, i), w = omega_(a, i);
+        denominator += u * u;
+        if (w != 0) numerator += u * u * (m_int_(a, i) - m_int_previous_(a, i)) / (dyn_inertia_[i] * dt_previous_ * w);
+      }
+    }
+  if (!(denominator > 0) || !(numerator > 0)) return 0.0;
+  return std::min(1.9, 2.0 * std::sqrt(numerator / denominator));
+}
+
+void MpmAnalysis::begin_level() {
+  if (!scaled_) return;
+  level_start_ = x_;
+  theta_.setZero();
+  masses_stale_ = true;
 }
 
 void MpmAnalysis::compute_internal_forces(Real dt_stress) {
@@ -320,6 +369,13 @@ Real MpmAnalysis::advance(Real load) {
   compute_internal_forces(dt_previous_);
   energy_.internal += dt_previous_ * element_power_.sum();
   energy_.hourglass += dt_previous_ * element_hourglass_power_.sum();
+  if (scaled_) {
+    if (masses_stale_ || masses_age_ >= kMassRefreshSteps) compute_fictitious_masses();
+    ++masses_age_;
+    if (o.adaptive_damping) adaptive_c_ = steps_ > 0 ? adaptive_damping_coefficient() : 0.0;
+    f_int_previous_ = f_int_;
+    m_int_previous_ = m_int_;
+  }
 
   // 2. time step (eqs (38)-(40)) combined with the shell stable step
   const Real vmax = vpos_.cwiseAbs().maxCoeff();
@@ -335,12 +391,16 @@ Real MpmAnalysis::advance(Real load) {
     dt = o.fixed_time_step;
     dt_control_ = "fixed";
   }
+  if (scaled_) {  // the fictitious masses make dt = 1 stable (Gershgorin bound)
+    dt = 1.0;
+    dt_control_ = "mass_scaling";
+  }
   if (!(dt > 0) || !std::isfinite(dt)) throw AnalysisError(fmt::format("time step {} at step {}: degenerate elements", dt, steps_));
   dt_ = dt;
 
   // 3. external forces, damping, residual
   compute_external_forces(load);
-  const Real c = o.mass_damping;
+  const Real c = scaled_ && o.adaptive_damping ? adaptive_c_ : o.mass_damping;
   f_net_ = f_ext_ - f_int_;
   Eigen::Matrix3Xd& m_net = m_net_;
   m_net = m_ext_ - m_int_;
@@ -353,13 +413,25 @@ Real MpmAnalysis::advance(Real load) {
       int2 += f_int_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
               m_int_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
     }
+    if (scaled_ && o.adaptive_damping && c > 0) {
+      // adaptive damping: the damping force c m v joins the imbalance, so that a node swinging through
+      // equilibrium (zero residual at full velocity) does not end the level
+      for (Index i = 0; i < n; ++i)
+        r2 += (c * dyn_mass_[i]) * (c * dyn_mass_[i]) * v_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+              (c * dyn_inertia_[i]) * (c * dyn_inertia_[i]) * omega_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+    }
     const Real scale = std::max({ext2, int2, std::numeric_limits<Real>::min()});
     residual_ratio_ = std::sqrt(r2 / scale);
   }
-  if (c > 0) {
+  // adaptive damping is central (seed 002 eq (7)): v^{n+1/2} = ((1 - c dt/2) v^{n-1/2} + dt f / m) / (1 + c dt/2),
+  // applied in the grid update and the rotation update (an explicit -c m v^{n-1/2} would shrink the
+  // stable step to omega^2 dt^2 < 4 - 2 c dt)
+  const bool central_damping = scaled_ && o.adaptive_damping;
+  const Real keep = central_damping ? 1.0 - 0.5 * c * dt : 1.0, divide = central_damping ? 1.0 + 0.5 * c * dt : 1.0;
+  if (c > 0 && !central_damping) {
     for (Index i = 0; i < n; ++i) {
-      f_net_.col(i) -= c * mass_[i] * v_.col(i);
-      m_net.col(i) -= c * inertia_[i] * omega_.col(i);
+      f_net_.col(i) -= c * dyn_mass_[i] * v_.col(i);
+      m_net.col(i) -= c * dyn_inertia_[i] * omega_.col(i);
     }
   }
 
@@ -368,9 +440,9 @@ Real MpmAnalysis::advance(Real load) {
   Eigen::Matrix3Xd &grid_mass = grid_mass_, &grid_momentum = grid_momentum_, &grid_force = grid_force_;
   {
     StageTimer t(stage_seconds_, "p2g");
-    if (node_mass_.cols() != n) node_mass_ = (Eigen::Matrix3Xd::Ones(3, n).array().rowwise() * mass_.transpose().array()).matrix();
+    if (node_mass_.cols() != n) node_mass_ = (Eigen::Matrix3Xd::Ones(3, n).array().rowwise() * dyn_mass_.transpose().array()).matrix();
     momentum_.resize(3, n);
-    for (Index i = 0; i < n; ++i) momentum_.col(i) = mass_[i] * v_.col(i);
+    for (Index i = 0; i < n; ++i) momentum_.col(i) = dyn_mass_[i] * v_.col(i);
     grid_.scatter(node_mass_, free_, grid_mass);
     grid_.scatter(momentum_, free_, grid_momentum);
     grid_.scatter(f_net_, free_, grid_force);
@@ -387,8 +459,13 @@ Real MpmAnalysis::advance(Real load) {
       for (int a = 0; a < 3; ++a) {
         const Real m = grid_mass(a, s);
         if (m > 0) {
-          grid_acceleration(a, s) = grid_force(a, s) / m;
-          grid_velocity(a, s) = (grid_momentum(a, s) + dt * grid_force(a, s)) / m;
+          if (central_damping) {
+            grid_velocity(a, s) = (keep * grid_momentum(a, s) + dt * grid_force(a, s)) / (divide * m);
+            grid_acceleration(a, s) = (grid_velocity(a, s) - grid_momentum(a, s) / m) / dt;
+          } else {
+            grid_acceleration(a, s) = grid_force(a, s) / m;
+            grid_velocity(a, s) = (grid_momentum(a, s) + dt * grid_force(a, s)) / m;
+          }
         } else {
           grid_acceleration(a, s) = grid_velocity(a, s) = 0.0;  // no free mass: fixed grid node (eq (7))
         }
@@ -408,12 +485,15 @@ Real MpmAnalysis::advance(Real load) {
         if (free_(a, i) > 0) {
           const Real v_flip = v_(a, i) + dt * a_grid(a, i);
           v_(a, i) = flip * v_flip + (1.0 - flip) * v_pic(a, i);
-          transfer_loss_[i] += 0.5 * mass_[i] * (v_flip * v_flip - v_(a, i) * v_(a, i));
+          transfer_loss_[i] += 0.5 * dyn_mass_[i] * (v_flip * v_flip - v_(a, i) * v_(a, i));
           vpos_(a, i) = v_pic(a, i);
         } else {
           v_(a, i) = vpos_(a, i) = 0.0;
         }
-        omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / inertia_[i] : 0.0;
+        if (central_damping)
+          omega_(a, i) = rotation_free_(a, i) > 0 ? (keep * omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i]) / divide : 0.0;
+        else
+          omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
       }
     }
   }
@@ -421,13 +501,16 @@ Real MpmAnalysis::advance(Real load) {
 
   // 7. damping bookkeeping and kinetic-energy damping
   Real kinetic = 0.0;
-  for (Index i = 0; i < n; ++i) kinetic += 0.5 * (mass_[i] * v_.col(i).squaredNorm() + inertia_[i] * omega_.col(i).squaredNorm());
+  for (Index i = 0; i < n; ++i) kinetic += 0.5 * (dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm());
   if (c > 0) {
     Real p = 0;
-    for (Index i = 0; i < n; ++i) p += c * (mass_[i] * v_.col(i).squaredNorm() + inertia_[i] * omega_.col(i).squaredNorm());
+    for (Index i = 0; i < n; ++i) p += c * (dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm());
     energy_.damping += dt * p;
   }
-  if (o.kinetic_damping && kinetic < kinetic_previous_) {
+  // kinetic damping: the option, or the fallback of adaptive damping where its estimate is zero (a
+  // negative local stiffness, e.g. past a limit point: the motion would stay undamped)
+  const bool kinetic_on = o.kinetic_damping || (scaled_ && o.adaptive_damping && c == 0.0);
+  if (kinetic_on && kinetic < kinetic_previous_) {
     energy_.damping += kinetic;
     for (Index i = 0; i < n; ++i)
       for (int a = 0; a < 3; ++a) {
@@ -436,7 +519,7 @@ Real MpmAnalysis::advance(Real load) {
       }
     kinetic_previous_ = 0.0;
     kinetic = 0.0;
-    for (Index i = 0; i < n; ++i) kinetic += 0.5 * mass_[i] * v_.col(i).squaredNorm();
+    for (Index i = 0; i < n; ++i) kinetic += 0.5 * dyn_mass_[i] * v_.col(i).squaredNorm();
   } else {
     kinetic_previous_ = kinetic;
   }
@@ -454,6 +537,7 @@ Real MpmAnalysis::advance(Real load) {
   {
     StageTimer t(stage_seconds_, "update");
     x_ += dt * vpos_;
+    if (scaled_) theta_ += dt * omega_;
     grid_.locate(x_);
   }
   if (!std::isfinite(kinetic) || !std::isfinite(energy_.internal))
@@ -475,6 +559,7 @@ void MpmAnalysis::run(OutputSink& sink) {
       const int level = loop_.level;
       const Real load = static_cast<Real>(level) / o.load_levels, previous = static_cast<Real>(level - 1) / o.load_levels;
       Index& level_steps = loop_.level_steps;
+      if (level_steps == 0) begin_level();
       while (true) {
         const bool ramping = level_steps < o.level_ramp_steps;
         advance(ramping ? previous + (load - previous) * static_cast<Real>(level_steps + 1) / static_cast<Real>(o.level_ramp_steps)
@@ -485,13 +570,23 @@ void MpmAnalysis::run(OutputSink& sink) {
           unconverged_levels_.push_back(level);
           break;
         }
-        if (level_steps % 20000 == 0)
-          sink.progress((level - 1 + std::min(1.0, -std::log10(std::max(residual_ratio_, 1e-30)) / -std::log10(o.tolerance))) /
-                            o.load_levels,
+        if (level_steps % 5000 == 0) {
+          // within the level: steps against the mean of the finished levels (their cost is what the ETA
+          // extrapolates); the first level only has the residual's decades to go by
+          Real within = std::min(1.0, -std::log10(std::max(residual_ratio_, 1e-30)) / -std::log10(o.tolerance));
+          if (!level_step_counts_.empty()) {
+            Real mean = 0;
+            for (int k : level_step_counts_) mean += static_cast<Real>(k);
+            mean /= static_cast<Real>(level_step_counts_.size());
+            within = std::min(0.95, static_cast<Real>(level_steps) / std::max(mean, 1.0));
+          }
+          sink.progress((level - 1 + within) / o.load_levels,
                         fmt::format("level {}/{} residual {:.2e} dt {:.3g}", level, o.load_levels, residual_ratio_, dt_));
+        }
         sink.safe_point();
       }
       level_residual_.push_back(residual_ratio_);
+      level_step_counts_.push_back(static_cast<int>(level_steps));
       sink.progress(static_cast<Real>(level) / o.load_levels,
                     fmt::format("level {}/{} residual {:.2e} steps {}", level, o.load_levels, residual_ratio_, steps_));
       sink.output_point(steps_, time_, load);
@@ -726,6 +821,18 @@ void MpmAnalysis::state_fields(Self& self, Archive& a) {
   a.field("mpm.loop.level_steps", self.loop_.level_steps);
   a.field("mpm.loop.level_done", self.loop_.level_done);
   a.field("mpm.loop.next_output", self.loop_.next_output);
+  if (self.scaled_) {  // mass-scaled quasi-static: the fictitious masses and the damping estimate's state
+    a.field("mpm.mass_scaling.mass", self.dyn_mass_);
+    a.field("mpm.mass_scaling.inertia", self.dyn_inertia_);
+    a.field("mpm.mass_scaling.level_start", self.level_start_);
+    a.field("mpm.mass_scaling.theta", self.theta_);
+    a.field("mpm.mass_scaling.f_int_previous", self.f_int_previous_);
+    a.field("mpm.mass_scaling.m_int_previous", self.m_int_previous_);
+    a.field("mpm.mass_scaling.damping", self.adaptive_c_);
+    a.field("mpm.mass_scaling.age", self.masses_age_);
+    a.field("mpm.mass_scaling.stale", self.masses_stale_);
+    a.field("mpm.mass_scaling.level_steps", self.level_step_counts_);
+  }
 }
 
 void MpmAnalysis::save_state(StateWriter& out) const {
@@ -747,6 +854,11 @@ void MpmAnalysis::restore_state(const StateReader& in) {
   require(steps_ >= 0 && loop_.level_steps >= 0, "step counts");
   require(loop_.level >= 1 && loop_.level <= o.load_levels + 1, "quasi-static level");
   require(loop_.next_output >= 1 && loop_.next_output <= o.output_points + 1, "next output point");
+  if (scaled_) {
+    require(dyn_mass_.allFinite() && dyn_mass_.minCoeff() > 0 && dyn_inertia_.allFinite() && dyn_inertia_.minCoeff() > 0,
+            "fictitious masses");
+    node_mass_.resize(3, 0);  // the grid's copy of the masses is rebuilt
+  }
   if (loop_.level_done) {  // written after the level's output point: continue with the next level
     ++loop_.level;
     loop_.level_steps = 0;

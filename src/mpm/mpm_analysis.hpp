@@ -5,8 +5,11 @@
 // One explicit step, as an ordered list of stages (x^n, velocities at n-1/2):
 //  1. element stage: every BT domain updates its stresses with the node velocities that moved it
 //     to x^n and returns nodal forces/moments (eqs (17)-(37)); nodes gather them (no atomics).
-//  2. time step: dt = min(shell_safety * min_e L_e / c, alpha * cell / (c_dil + max |v_i|)) (eqs (38)-(40)).
-//  3. external loads at the load factor / time; damping forces; the residual.
+//  2. time step: dt = min(shell_safety * min_e L_e / c, alpha * cell / (c_dil + max |v_i|)) (eqs (38)-(40));
+//     mass-scaled quasi-static (mpm.mass_scaling: stiffness): dt = 1 with fictitious masses m_i = s/4 sum_j |K_ij| from
+//     the element tangents (seed 002 eq (5)), refreshed every level and every 1000 steps.
+//  3. external loads at the load factor / time; damping forces (mass-scaled: adaptive dynamic
+//     relaxation, c = 2 sqrt(u^T K u / u^T M u) on the level's increment, seed 002 eqs (6)-(7)); the residual.
 //  4. P2G (eqs (1)-(4)): grid mass, momentum and force m_I = sum_c S_I(x_c) m_c, ... (each free
 //     component separately, so a fixed component of a node adds nothing to the grid).
 //  5. grid update (eqs (5)-(7)): v_I = (p_I + dt f_I) / m_I; grid nodes without free mass stay at rest.
@@ -93,6 +96,13 @@ class MpmAnalysis : public Analysis {
   void compute_external_forces(Real load);
   void apply_prescribed(Real load);
   Real node_velocity_limit() const;
+  /// Mass scaling: fictitious node masses / inertias from the row sums of the element tangents (finite
+  /// differences of the element update at the current state), m_i = 1/4 sum_j |K_ij| (dt = 1).
+  void compute_fictitious_masses();
+  /// Adaptive damping coefficient from the Rayleigh quotient of the level's increment (seed 002 eq (6)).
+  Real adaptive_damping_coefficient() const;
+  /// Start of a quasi-static level: the increment of the damping estimate restarts, the masses are refreshed.
+  void begin_level();
 
   MpmProblem problem_;
   std::vector<Probe> probes_;
@@ -102,7 +112,16 @@ class MpmAnalysis : public Analysis {
 
   // nodes (corners): structure of arrays
   PointMatrix reference_, x_, v_, vpos_, omega_;
-  Eigen::VectorXd mass_, inertia_;
+  Eigen::VectorXd mass_, inertia_;            // physical (also the weights of the residual norm)
+  Eigen::VectorXd dyn_mass_, dyn_inertia_;    // the masses of the motion: physical, or fictitious (mass scaling)
+  bool scaled_ = false;                       // quasi-static with mass scaling
+  // mass-scaled quasi-static state: level start, rotation increment, previous internal forces, damping
+  PointMatrix level_start_, theta_;
+  Eigen::Matrix3Xd f_int_previous_, m_int_previous_;
+  Real adaptive_c_ = 0;
+  Index masses_age_ = 0;                      // steps since the fictitious masses were computed
+  bool masses_stale_ = true;
+  std::vector<int> level_step_counts_;        // steps of each finished level (progress ETA)
   Eigen::Matrix3Xd free_, rotation_free_;  // 1 = free, 0 = prescribed (per component)
   Eigen::Matrix3Xd f_int_, m_int_, f_ext_, m_ext_, f_net_;
   // per-step work arrays, kept to avoid re-allocating them every step

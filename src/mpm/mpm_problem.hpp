@@ -44,7 +44,12 @@ struct MpmOptions {
   Real fixed_time_step = 0.0;     // > 0: this step instead of the adaptive one (no stability check)
   Real grid_cell = 0.0;           // 0: half the median element edge
   Real flip = 0.0;                // FLIP fraction of the G2P velocity update (0 = PIC)
-  bool kinetic_damping = true;    // zero the velocities at every kinetic-energy peak (quasi-static default)
+  bool kinetic_damping = true;    // zero the velocities at every kinetic-energy peak (quasi-static default with physical mass)
+  /// quasi-static only: fictitious nodal masses and rotational inertias from the Gershgorin bound of the
+  /// element tangent stiffness (m_i = 1/4 dt^2 sum_j |K_ij|, dt = 1; seed 002 eq (5)) instead of the physical ones.
+  bool mass_scaling = false;
+  /// with mass_scaling: adaptive dynamic relaxation damping c = 2 sqrt(u^T K u / u^T M u) (seed 002 eqs (6)-(7)).
+  bool adaptive_damping = true;
   Real mass_damping = 0.0;        // c in f = -c m v, m_rot = -c I omega (1/time)
   Real tolerance = 1e-4;          // quasi-static: residual ratio that ends a load level
   Index max_steps_per_level = 2000000;

@@ -106,6 +106,28 @@ double summary_value(const std::string& name, const std::string& key) {
   return std::stod(text.substr(at + key.size() + 3));
 }
 
+// Mass scaling (mpm.mass_scaling: stiffness) and the physical-mass default reach the same static answer;
+// the fictitious masses (Gershgorin bound) keep the run stable at dt = 1 and the energy balance closed.
+TEST(mpm_Cases, MassScaledAndPhysicalQuasiStaticAgree) {
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  const Outcome scaled = run_case("scaled", kStrip, "--set mpm.mass_scaling=stiffness");
+  ASSERT_EQ(scaled.exit_code, 0) << scaled.output;
+  const Outcome physical = run_case("physical", kStrip);
+  ASSERT_EQ(physical.exit_code, 0) << physical.output;
+  EXPECT_NEAR(summary_value("scaled", "w_tip"), exact, 0.01 * exact);
+  EXPECT_NEAR(summary_value("physical", "w_tip"), exact, 0.01 * exact);
+  EXPECT_EQ(summary_value("scaled", "time_step"), 1.0);
+  EXPECT_NEAR(summary_value("scaled", "energy_ratio"), 1.0, 0.05);
+}
+
+TEST(mpm_Cases, AdaptiveDampingNeedsMassScaling) {
+  const Outcome o = run_case("adaptive_physical", kStrip, "--set mpm.damping.adaptive=true", true);
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("mass_scaling"), std::string::npos) << o.output;
+  const Outcome bad = run_case("mass_scaling_word", kStrip, "--set mpm.mass_scaling=fictitious", true);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+}
+
 TEST(mpm_Cases, BendingHourglassCoefficientIsReadAndRangeChecked) {
   // the cantilever stores no hourglass energy, so the physical bending coefficient leaves it unchanged
   const Outcome ok = run_case("hg_bending", kStrip, "--set shell.hourglass=0.1 --set shell.hourglass_bending=1.0");
