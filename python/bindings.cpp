@@ -55,9 +55,13 @@ py::object to_python(const YAML::Node& node) {
 
 /// Whether text written plainly would be read back as something other than text.
 bool needs_quotes(const std::string& text) {
-  YAML::Node plain = YAML::Load(text.empty() ? std::string("''") : text);
-  return text.empty() || !plain.IsScalar() || !py::isinstance<py::str>(scalar_object(plain)) ||
-         plain.Scalar() != text;
+  if (text.empty()) return true;
+  try {
+    YAML::Node plain = YAML::Load(text);
+    return !plain.IsScalar() || !py::isinstance<py::str>(scalar_object(plain)) || plain.Scalar() != text;
+  } catch (const YAML::Exception&) {
+    return true;  // not valid as a plain scalar (e.g. "{x" or "a: [")
+  }
 }
 
 void emit(YAML::Emitter& out, const py::handle& value, const std::string& path) {

@@ -49,6 +49,10 @@ def test_load_reads_the_case_as_the_reader_does():
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text)
     assert dict(lamina.load(path)) == dict(case)
+    # text that would read back as something else, or is not plain YAML, is quoted
+    tricky = {"a": "1e4", "b": "true", "c": "{x", "d": "k: v", "e": "", "f": "null", "g": [1, 2.5, "3"], "h": None}
+    path.write_text(lamina.dumps(tricky))
+    assert dict(lamina.load(path)) == tricky
 
 
 def test_case_from_a_dict_equals_the_command_line():
