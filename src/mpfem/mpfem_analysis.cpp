@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "mpfem/free_dofs.hpp"
 #include "mpfem/gradient_list.hpp"
 #include "mpfem/strain_fit.hpp"
 
@@ -484,16 +485,11 @@ void MpfemAnalysis::assemble_and_solve() {
 
   // essential conditions: eliminate the prescribed particle dofs
   const auto solve_start = Clock::now();
-  std::vector<char> prescribed(static_cast<std::size_t>(2 * n), 0);
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(2 * n);
-  for (const auto& d : problem_.prescribed) {
-    prescribed[static_cast<std::size_t>(2 * d.particle + d.component)] = 1;
-    u[2 * d.particle + d.component] = d.value;
-  }
-  std::vector<int> free_id(static_cast<std::size_t>(2 * n), -1);
-  int free_count = 0;
-  for (Index i = 0; i < 2 * n; ++i)
-    if (!prescribed[static_cast<std::size_t>(i)]) free_id[static_cast<std::size_t>(i)] = free_count++;
+  const FreeDofs dofs = number_free_dofs(problem_.prescribed, n);
+  const std::vector<char>& prescribed = dofs.prescribed;
+  const std::vector<int>& free_id = dofs.free_id;
+  const int free_count = dofs.count;
+  Eigen::VectorXd u = dofs.values;
   if (free_count > 0) {
     Eigen::VectorXd rhs(free_count);
     for (Index i = 0; i < 2 * n; ++i)

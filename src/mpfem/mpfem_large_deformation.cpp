@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "mpfem/free_dofs.hpp"
 #include "mpfem/mpfem_analysis.hpp"
 
 namespace lamina::mpfem {
@@ -184,16 +185,11 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
   const Index n = problem_.layout.positions.cols();
   build_energy_points();
   f_ = load_vector();  // dead loads on the reference configuration
-  std::vector<char> prescribed(static_cast<std::size_t>(2 * n), 0);
-  Eigen::VectorXd u_prescribed = Eigen::VectorXd::Zero(2 * n);
-  for (const auto& d : problem_.prescribed) {
-    prescribed[static_cast<std::size_t>(2 * d.particle + d.component)] = 1;
-    u_prescribed[2 * d.particle + d.component] = d.value;
-  }
-  std::vector<int> free_id(static_cast<std::size_t>(2 * n), -1);
-  int free_count = 0;
-  for (Index i = 0; i < 2 * n; ++i)
-    if (!prescribed[static_cast<std::size_t>(i)]) free_id[static_cast<std::size_t>(i)] = free_count++;
+  const FreeDofs dofs = number_free_dofs(problem_.prescribed, n);
+  const std::vector<char>& prescribed = dofs.prescribed;
+  const Eigen::VectorXd& u_prescribed = dofs.values;
+  const std::vector<int>& free_id = dofs.free_id;
+  const int free_count = dofs.count;
   if (!f_.allFinite()) throw AnalysisError("mpfem: non-finite load vector; check the load expressions");
 
   // the residual's round-off floor: 1e-12 x the force of a unit strain on one particle (E t h)

@@ -147,7 +147,9 @@ TEST(shell_J2Plasticity, StressStaysOnTheYieldSurfaceAndUnloadsElastically) {
       m.update(p.data(), rate, 2e-4);
       const Real eps_p = p[kStressComponents], limit = kYield + hardening * eps_p;
       EXPECT_LE(von_mises(p), limit * (1 + 1e-12)) << k;
-      if (eps_p > previous_eps_p) EXPECT_NEAR(von_mises(p), limit, 1e-10 * limit) << k;
+      if (eps_p > previous_eps_p) {
+        EXPECT_NEAR(von_mises(p), limit, 1e-10 * limit) << k;
+      }
       EXPECT_GE(eps_p, previous_eps_p);
       previous_eps_p = eps_p;
     }
