@@ -11,7 +11,7 @@
 #include "geometry/generators.hpp"
 #include "geometry/gmsh_import.hpp"
 #include "geometry/selection.hpp"
-#include "pd/cell_lattice.hpp"
+#include "geometry/cell_lattice.hpp"
 #include "io/yaml_reader.hpp"
 
 namespace lamina::app {
@@ -164,7 +164,7 @@ Model build_point_model_unlocated(const io::Case& c, const ModelRequest& request
     const Vec3 lower = plate ? Vec3(g.min.x(), g.min.y(), -0.5 * g.thickness) : g.min;
     const Vec3 upper = plate ? Vec3(g.max.x(), g.max.y(), 0.5 * g.thickness) : g.max;
     const bool gauss_layers = plate && request.lattice_layers_at_gauss_points;
-    model.cloud = pd::lattice_point_cloud(pd::make_cell_lattice(lower, upper, *d.spacing), plate, gauss_layers);
+    model.cloud = geometry::lattice_point_cloud(geometry::make_cell_lattice(lower, upper, *d.spacing), plate, gauss_layers);
   } else if (d.nodes) {
     model.cloud = geometry::generate_volume_nodes(c.geometry, *d.nodes);
   } else if (d.particles) {  // 2D particle methods (mpfem): one layer in the generator's third direction

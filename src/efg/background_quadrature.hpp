@@ -19,13 +19,11 @@
 #include <functional>
 #include <vector>
 
+#include "core/gauss_legendre.hpp"  // gauss_legendre (used by the cell rules)
 #include "core/types.hpp"
 #include "geometry/mapped_grid.hpp"
 
 namespace lamina::efg {
-
-/// Gauss-Legendre points and weights on [-1, 1] (n >= 1), by Newton iteration on P_n.
-void gauss_legendre(int n, std::vector<Real>& points, std::vector<Real>& weights);
 
 struct BackgroundCells {
   geometry::VolumeMap map;

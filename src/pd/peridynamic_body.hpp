@@ -28,7 +28,7 @@
 // shear), vertical bonds half of E_zz, all cross-layer bonds 10 % of the in-plane modulus (against the
 // zig-zag w hourglass). Exact homogeneous energy of the plate law at every node; bending energy = sum
 // over the layers of V_k 1/2 eps(z_k) C eps(z_k) less the cross-layer share (exact lumping when the
-// layers sit at the Gauss points of the thickness, see cell_lattice.hpp).
+// layers sit at the Gauss points of the thickness, see geometry/cell_lattice.hpp).
 #include <cstdint>
 #include <vector>
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "pd/cell_lattice.hpp"
+#include "geometry/cell_lattice.hpp"
 #include "core/error.hpp"
 #include "pd/peridynamic_analysis.hpp"
 #include "pd/peridynamic_plate.hpp"
@@ -13,6 +13,9 @@
 
 using namespace lamina;
 using namespace lamina::pd;
+using lamina::geometry::lattice_point_cloud;
+using lamina::geometry::make_cell_lattice;
+using lamina::geometry::CellLattice;
 
 namespace {
 

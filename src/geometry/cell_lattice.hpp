@@ -1,5 +1,5 @@
 #pragma once
-// CellLattice: the peridynamic discretisation of a box or plate by a regular lattice of cells
+// CellLattice: the point generator of a box or plate as a regular lattice of cells (the peridynamic lattice)
 // with per-direction spacing (seed 002 section 4.1 "plate lattice": 10 x 10 x 1 mm cells, two layers).
 //
 // Nodes sit at the cell centres; each carries its cell volume dx dy dz. The number of cells per
@@ -12,7 +12,7 @@
 #include "core/point_cloud.hpp"
 #include "core/types.hpp"
 
-namespace lamina::pd {
+namespace lamina::geometry {
 
 struct CellLattice {
   Vec3 lower = Vec3::Zero();  // body bounding box
@@ -31,7 +31,4 @@ CellLattice make_cell_lattice(const Vec3& lower, const Vec3& upper, const Vec3& 
 /// 2 nz - 1 exactly (bending stiffness sum V_k z_k^2 = t^3 / 12 per unit area from 2 layers on).
 PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets, bool gauss_layers = false);
 
-/// n-point Gauss-Legendre rule on [-1, 1]: points (ascending) and weights.
-void gauss_legendre(Index n, Eigen::VectorXd& points, Eigen::VectorXd& weights);
-
-}  // namespace lamina::pd
+}  // namespace lamina::geometry

@@ -1,8 +1,11 @@
-#include "pd/cell_lattice.hpp"
+#include "geometry/cell_lattice.hpp"
 
 #include <cmath>
+#include <vector>
 
-namespace lamina::pd {
+#include "core/gauss_legendre.hpp"
+
+namespace lamina::geometry {
 
 CellLattice make_cell_lattice(const Vec3& lower, const Vec3& upper, const Vec3& requested_spacing) {
   CellLattice lattice;
@@ -15,35 +18,6 @@ CellLattice make_cell_lattice(const Vec3& lower, const Vec3& upper, const Vec3& 
     lattice.spacing[d] = extent / static_cast<Real>(n);
   }
   return lattice;
-}
-
-void gauss_legendre(Index n, Eigen::VectorXd& points, Eigen::VectorXd& weights) {
-  points = Eigen::VectorXd::Zero(n);
-  weights = Eigen::VectorXd::Constant(n, 2.0);
-  if (n < 2) return;
-  const Real pi = 3.14159265358979323846;
-  auto legendre = [n](Real x, Real& derivative) {  // P_n(x) and P_n'(x) by the three-term recursion
-    Real p0 = 1, p1 = x;
-    for (Index k = 2; k <= n; ++k) {
-      const Real p2 = ((2 * static_cast<Real>(k) - 1) * x * p1 - (static_cast<Real>(k) - 1) * p0) / static_cast<Real>(k);
-      p0 = p1;
-      p1 = p2;
-    }
-    derivative = static_cast<Real>(n) * (x * p1 - p0) / (x * x - 1);
-    return p1;
-  };
-  for (Index i = 0; i < n; ++i) {
-    Real x = -std::cos(pi * (static_cast<Real>(i) + 0.75) / (static_cast<Real>(n) + 0.5));  // ascending guesses
-    Real derivative = 1;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      const Real step = legendre(x, derivative) / derivative;
-      x -= step;
-      if (std::abs(step) < 1e-16) break;
-    }
-    legendre(x, derivative);
-    points[i] = x;
-    weights[i] = 2 / ((1 - x * x) * derivative * derivative);
-  }
 }
 
 PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets, bool gauss_layers) {
@@ -63,12 +37,12 @@ PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets, bool
   Eigen::VectorXd layer_z(nz), layer_weight = Eigen::VectorXd::Ones(nz);
   for (Index k = 0; k < nz; ++k) layer_z[k] = lattice.lower.z() + (static_cast<Real>(k) + 0.5) * lattice.spacing.z();
   if (gauss_layers) {
-    Eigen::VectorXd points, weights;
-    gauss_legendre(nz, points, weights);
+    std::vector<Real> points, weights;
+    gauss_legendre(static_cast<int>(nz), points, weights);
     const Real centre = 0.5 * (lattice.lower.z() + lattice.upper.z()), half = 0.5 * (lattice.upper.z() - lattice.lower.z());
     for (Index k = 0; k < nz; ++k) {
-      layer_z[k] = centre + half * points[k];
-      layer_weight[k] = 0.5 * static_cast<Real>(nz) * weights[k];  // relative to the cell volume
+      layer_z[k] = centre + half * points[static_cast<std::size_t>(k)];
+      layer_weight[k] = 0.5 * static_cast<Real>(nz) * weights[static_cast<std::size_t>(k)];  // relative to the cell volume
     }
   }
   Index node = 0;
@@ -94,4 +68,4 @@ PointCloud lattice_point_cloud(const CellLattice& lattice, bool plate_sets, bool
   return cloud;
 }
 
-}  // namespace lamina::pd
+}  // namespace lamina::geometry
