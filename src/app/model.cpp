@@ -178,6 +178,11 @@ Model build_point_model_unlocated(const io::Case& c, const ModelRequest& request
   }
   if (d.jitter && d.jitter->amount > 0) jitter_nodes(model.cloud, *d.jitter, c.geometry);
 
+  resolve_selections(c, model);
+  return model;
+}
+
+void resolve_selections(const io::Case& c, Model& model) {
   std::vector<Diagnostic> problems;
   auto resolve = [&](const io::Selection& s) -> IndexList {
     try {
@@ -216,7 +221,6 @@ Model build_point_model_unlocated(const io::Case& c, const ModelRequest& request
     model.probes.push_back(probe);
   }
   if (!problems.empty()) throw InputError(problems);
-  return model;
 }
 
 }  // namespace lamina::app

@@ -40,6 +40,11 @@ Model build_point_model(const io::Case& c, const ModelRequest& request = {});
 /// case file and the line:column of that key (or of its nearest ancestor), in line order.
 InputError locate(const InputError& e, const io::Case& c);
 
+/// Resolve every selection of the case (boundary, loads, materials, probes) on model.cloud into the
+/// model's node lists and probes; all problems are gathered into one InputError (file positions set).
+/// A material without `select` gets every node.
+void resolve_selections(const io::Case& c, Model& model);
+
 /// Resolve one selection against a point cloud, throwing InputError at the selection's
 /// file position if it is empty or invalid.
 IndexList resolve_or_throw(const io::Selection& selection, const PointCloud& cloud);

@@ -90,34 +90,11 @@ std::unique_ptr<MethodOptions> read_mpfem(const io::Case&, const io::NodeReader&
   return result;
 }
 
-/// Resolves the case's selections on a regenerated particle cloud (same rules as build_point_model).
+/// Resolves the case's selections on a regenerated particle cloud (the rules of build_point_model).
 Model resolve_on(const io::Case& c, PointCloud cloud) {
   Model model;
   model.cloud = std::move(cloud);
-  for (const auto& bc : c.boundary) model.boundary_nodes.push_back(resolve_or_throw(bc.select, model.cloud));
-  for (const auto& load : c.loads) model.load_nodes.push_back(resolve_or_throw(load.select, model.cloud));
-  for (const auto& m : c.materials) {
-    if (m.select) model.material_nodes.push_back(resolve_or_throw(*m.select, model.cloud));
-    else model.material_nodes.push_back({});
-  }
-  for (const auto& p : c.probes) {
-    Probe probe;
-    probe.name = p.name;
-    probe.field = p.field;
-    probe.component = p.component;
-    probe.at = p.at;
-    if (p.select) probe.nodes = resolve_or_throw(*p.select, model.cloud);
-    if (p.set) {
-      io::Selection s;
-      s.spec.kind = geometry::SelectionSpec::Kind::set;
-      s.spec.set_name = *p.set;
-      s.location = p.location;
-      s.location.key_path += ".set";
-      probe.nodes = resolve_or_throw(s, model.cloud);
-      probe.nearest_in_set = p.at.has_value();
-    }
-    model.probes.push_back(probe);
-  }
+  resolve_selections(c, model);
   return model;
 }
 
