@@ -10,7 +10,7 @@
 #include <set>
 
 #include "core/error.hpp"
-#include "mpfem/free_dofs.hpp"
+#include "mpfem/dof_assembly.hpp"
 #include "mpfem/gradient_list.hpp"
 #include "mpfem/strain_fit.hpp"
 
@@ -355,16 +355,8 @@ void MpfemAnalysis::assemble_cell_stiffness(std::vector<Eigen::Triplet<Real, int
       }
       local[static_cast<std::size_t>(p - begin)] = thickness * k;
     }
-    for (Index p = begin; p < end; ++p) {
-      const IndexList& list = particles[static_cast<std::size_t>(p - begin)];
-      const Eigen::MatrixXd& k = local[static_cast<std::size_t>(p - begin)];
-      for (std::size_t a = 0; a < list.size(); ++a)
-        for (std::size_t bb = 0; bb < list.size(); ++bb)
-          for (int r = 0; r < 2; ++r)
-            for (int s = 0; s < 2; ++s)
-              triplets.emplace_back(static_cast<int>(2 * list[a] + r), static_cast<int>(2 * list[bb] + s),
-                                    k(static_cast<Index>(2 * a) + r, static_cast<Index>(2 * bb) + s));
-    }
+    for (Index p = begin; p < end; ++p)
+      add_local_stiffness(particles[static_cast<std::size_t>(p - begin)], local[static_cast<std::size_t>(p - begin)], triplets);
   }
 }
 
@@ -452,30 +444,14 @@ void MpfemAnalysis::assemble_and_solve() {
     triplets.reserve(static_cast<std::size_t>(n) * 100);
     for (Index p = 0; p < n; ++p) {
       const ParticleElement& e = discretization_.elements[static_cast<std::size_t>(p)];
-      const ElementStiffness& k = local[static_cast<std::size_t>(p)];
-      for (int a = 0; a < kElementNodes; ++a) {
-        const Index ja = e.nodes[static_cast<std::size_t>(a)];
-        if (ja < 0) continue;
-        for (int b = 0; b < kElementNodes; ++b) {
-          const Index jb = e.nodes[static_cast<std::size_t>(b)];
-          if (jb < 0) continue;
-          for (int r = 0; r < 2; ++r)
-            for (int s = 0; s < 2; ++s)
-              triplets.emplace_back(static_cast<int>(2 * ja + r), static_cast<int>(2 * jb + s), k(2 * a + r, 2 * b + s));
-        }
-      }
+      add_local_stiffness(e.nodes, local[static_cast<std::size_t>(p)], triplets);
     }
   } else {
     for (const auto& t : grid_triangles()) {
       const Eigen::Matrix3d c = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(t.nodes[0])])].matrix();
       const Eigen::Matrix<Real, 3, 6> b = triangle_strain_operator(t.gradient);
       const Eigen::Matrix<Real, 6, 6> k = (thickness * t.area) * b.transpose() * c * b;
-      for (int a = 0; a < 3; ++a)
-        for (int bb = 0; bb < 3; ++bb)
-          for (int r = 0; r < 2; ++r)
-            for (int s = 0; s < 2; ++s)
-              triplets.emplace_back(static_cast<int>(2 * t.nodes[static_cast<std::size_t>(a)] + r),
-                                    static_cast<int>(2 * t.nodes[static_cast<std::size_t>(bb)] + s), k(2 * a + r, 2 * bb + s));
+      add_local_stiffness(t.nodes, k, triplets);
     }
   }
   stiffness_.resize(static_cast<int>(2 * n), static_cast<int>(2 * n));
@@ -494,19 +470,7 @@ void MpfemAnalysis::assemble_and_solve() {
     Eigen::VectorXd rhs(free_count);
     for (Index i = 0; i < 2 * n; ++i)
       if (free_id[static_cast<std::size_t>(i)] >= 0) rhs[free_id[static_cast<std::size_t>(i)]] = f_[i];
-    std::vector<Eigen::Triplet<Real, int>> reduced;
-    reduced.reserve(static_cast<std::size_t>(stiffness_.nonZeros() / 2 + free_count));
-    for (int col = 0; col < stiffness_.outerSize(); ++col)
-      for (solve::SparseMatrix::InnerIterator it(stiffness_, col); it; ++it) {
-        const int fr = free_id[static_cast<std::size_t>(it.row())], fc = free_id[static_cast<std::size_t>(col)];
-        if (fr >= 0 && fc >= 0) {
-          if (fr <= fc) reduced.emplace_back(fr, fc, it.value());
-        } else if (fr >= 0) {
-          rhs[fr] -= it.value() * u[col];
-        }
-      }
-    solve::SparseMatrix k(free_count, free_count);
-    k.setFromTriplets(reduced.begin(), reduced.end());
+    const solve::SparseMatrix k = reduce_to_free_dofs(stiffness_, dofs, &u, &rhs);
     if (!rhs.allFinite()) throw AnalysisError("mpfem: non-finite load vector; check the load expressions");
     Eigen::VectorXd uf;
     try {

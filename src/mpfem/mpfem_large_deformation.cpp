@@ -11,7 +11,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
-#include "mpfem/free_dofs.hpp"
+#include "mpfem/dof_assembly.hpp"
 #include "mpfem/mpfem_analysis.hpp"
 
 namespace lamina::mpfem {
@@ -122,13 +122,7 @@ bool MpfemAnalysis::internal_forces(const Eigen::VectorXd& u, Eigen::VectorXd& f
       total += local_energy[s];
       for (std::size_t a = 0; a < list.size(); ++a) force.segment<2>(2 * list[a]) += local_force[s].segment<2>(2 * static_cast<Index>(a));
       if (!tangent) continue;
-      const Eigen::MatrixXd& k = local_tangent[s];
-      for (std::size_t a = 0; a < list.size(); ++a)
-        for (std::size_t b = 0; b < list.size(); ++b)
-          for (int r = 0; r < 2; ++r)
-            for (int c = 0; c < 2; ++c)
-              triplets.emplace_back(static_cast<int>(2 * list[a] + r), static_cast<int>(2 * list[b] + c),
-                                    k(static_cast<Index>(2 * a) + r, static_cast<Index>(2 * b) + c));
+      add_local_stiffness(list, local_tangent[s], triplets);
     }
   }
   if (!valid) return false;
@@ -227,15 +221,7 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
                               options.max_iterations, norm / std::max(reference, 1e-300));
         return false;
       }
-      std::vector<Eigen::Triplet<Real, int>> reduced;
-      reduced.reserve(static_cast<std::size_t>(tangent.nonZeros() / 2 + free_count));
-      for (int col = 0; col < tangent.outerSize(); ++col)
-        for (solve::SparseMatrix::InnerIterator it(tangent, col); it; ++it) {
-          const int fr = free_id[static_cast<std::size_t>(it.row())], fc = free_id[static_cast<std::size_t>(col)];
-          if (fr >= 0 && fc >= 0 && fr <= fc) reduced.emplace_back(fr, fc, it.value());
-        }
-      solve::SparseMatrix k(free_count, free_count);
-      k.setFromTriplets(reduced.begin(), reduced.end());
+      const solve::SparseMatrix k = reduce_to_free_dofs(tangent, dofs);
       Eigen::VectorXd du;
       try {
         solve::SolverOptions solver;
