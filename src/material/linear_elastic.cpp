@@ -19,6 +19,13 @@ VoigtMatrix LinearElastic::matrix() const {
   return D;
 }
 
+Mat3 LinearElastic::plane_stress_matrix() const {
+  const Real f = plane_stress_modulus();
+  Mat3 c;
+  c << f, f * nu, 0, f * nu, f, 0, 0, 0, f * (1 - nu) / 2;
+  return c;
+}
+
 Voigt LinearElastic::stress(const Voigt& e) const {
   const Real l = lambda(), m = mu();
   const Real trace = e[0] + e[1] + e[2];

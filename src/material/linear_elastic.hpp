@@ -16,10 +16,17 @@ struct LinearElastic {
   Real E = 0.0;
   Real nu = 0.0;
 
+  // The moduli, computed here and nowhere else.
   Real lambda() const { return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)); }
   Real mu() const { return E / (2.0 * (1.0 + nu)); }
+  Real bulk_modulus() const { return E / (3.0 * (1.0 - 2.0 * nu)); }
   /// P-wave (constrained) modulus lambda + 2 mu: the largest eigenvalue scale of D.
   Real p_wave_modulus() const { return lambda() + 2.0 * mu(); }
+  /// Plane-stress modulus E / (1 - nu^2) (membrane stiffness per thickness, D = E' t^3 / 12).
+  Real plane_stress_modulus() const { return E / (1.0 - nu * nu); }
+
+  /// 3 x 3 plane-stress matrix [xx yy xy] with engineering shear: E' [[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]].
+  Mat3 plane_stress_matrix() const;
 
   /// 6 x 6 elasticity matrix D.
   VoigtMatrix matrix() const;

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/types.hpp"
+#include "material/linear_elastic.hpp"
 
 namespace lamina::material {
 
@@ -18,9 +19,8 @@ struct MaterialSpec {
   Real yield_stress = 0.0;   // j2_plasticity
   Real hardening = 0.0;      // j2_plasticity: linear isotropic hardening modulus
 
-  Real shear_modulus() const { return E / (2.0 * (1.0 + nu)); }
-  Real lame_lambda() const { return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)); }
-  Real bulk_modulus() const { return E / (3.0 * (1.0 - 2.0 * nu)); }
+  /// The elastic constants, whose moduli LinearElastic computes.
+  LinearElastic elastic() const { return LinearElastic{E, nu}; }
 };
 
 }  // namespace lamina::material

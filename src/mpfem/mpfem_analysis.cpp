@@ -89,11 +89,9 @@ const std::map<std::string, int> kTensor{{"xx", 0}, {"yy", 1}, {"zz", 2}, {"xy",
 }  // namespace
 
 Eigen::Matrix3d PlaneMaterial::matrix() const {
-  const Real E = elastic.E, nu = elastic.nu;
   Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
   if (plane == PlaneKind::stress) {
-    const Real f = E / (1 - nu * nu);
-    c << f, f * nu, 0, f * nu, f, 0, 0, 0, f * (1 - nu) / 2;
+    c = elastic.plane_stress_matrix();
   } else {
     const Real l = elastic.lambda(), m = elastic.mu();
     c << l + 2 * m, l, 0, l, l + 2 * m, 0, 0, 0, m;

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "material/linear_elastic.hpp"
 #include "pd/load_path_events.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
@@ -720,10 +721,11 @@ Real PeridynamicAnalysis::probe(const Probe& p) const {
     return eps(a, b);
   }
   const Real e = problem_.young[i], nu = problem_.poisson[i];
-  const Real mu = e / (2 * (1 + nu)), lambda = e * nu / ((1 + nu) * (1 - 2 * nu));
+  const material::LinearElastic elastic{e, nu};
+  const Real mu = elastic.mu(), lambda = elastic.lambda();
   Mat3 sigma;
   if (body_->options().kinematics == Kinematics::plane_stress) {
-    const Real c = e / (1 - nu * nu);
+    const Real c = elastic.plane_stress_modulus();
     sigma.setZero();
     sigma(0, 0) = c * (eps(0, 0) + nu * eps(1, 1));
     sigma(1, 1) = c * (eps(1, 1) + nu * eps(0, 0));

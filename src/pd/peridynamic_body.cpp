@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "material/linear_elastic.hpp"
 
 namespace lamina::pd {
 
@@ -168,7 +169,8 @@ void PeridynamicBody::build_families() {
 
 Eigen::MatrixXd PeridynamicBody::classical_stiffness(Index i) const {
   const Real e = young_[i], nu = poisson_[i];
-  const Real mu = e / (2 * (1 + nu)), lambda = e * nu / ((1 + nu) * (1 - 2 * nu));
+  const material::LinearElastic elastic{e, nu};
+  const Real mu = elastic.mu(), lambda = elastic.lambda();
   if (dimension() == 3) {
     Eigen::MatrixXd c = Eigen::MatrixXd::Zero(6, 6);
     for (int a = 0; a < 3; ++a) {
@@ -180,7 +182,7 @@ Eigen::MatrixXd PeridynamicBody::classical_stiffness(Index i) const {
   }
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3, 3);
   const bool stress = options_.kinematics == Kinematics::plane_stress;
-  const Real c11 = stress ? e / (1 - nu * nu) : lambda + 2 * mu, c12 = stress ? nu * e / (1 - nu * nu) : lambda;
+  const Real c11 = stress ? elastic.plane_stress_modulus() : lambda + 2 * mu, c12 = stress ? nu * e / (1 - nu * nu) : lambda;
   c << c11, c12, 0, c12, c11, 0, 0, 0, mu;
   return c;
 }
@@ -312,7 +314,7 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
   for (std::size_t k = 0; k < representative.size(); ++k) {
     const Index i = representative[k];
     fits[k] = fit_family(moments[static_cast<std::size_t>(i)], grams[static_cast<std::size_t>(i)], classical_stiffness(i),
-                         young[i] / (2 * (1 + poisson[i])), dim);
+                         material::LinearElastic{young[i], poisson[i]}.mu(), dim);
   }
   statistics_.family_kinds = static_cast<Real>(representative.size());
   // Pass 3: bond weights and moduli.
@@ -320,7 +322,7 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
 #pragma omp parallel for schedule(static) reduction(max : max_dilatation_error)
   for (Index i = 0; i < n; ++i) {
     const Eigen::MatrixXd c = classical_stiffness(i);
-    const Real mu = young[i] / (2 * (1 + poisson[i]));
+    const Real mu = material::LinearElastic{young[i], poisson[i]}.mu();
     kappa_[i] = c(0, 1) - mu;
     const Real m = weighted_volume[i];
     Eigen::MatrixXd d = Eigen::MatrixXd::Zero(dim, dim), q = Eigen::MatrixXd::Zero(dim, dim);
@@ -384,7 +386,7 @@ struct PlateFit {
 PlateFit fit_plate_family(const std::vector<Vec3>& xi, const std::vector<Real>& volume, const std::vector<Real>& omega,
                           Real e, Real nu, Real delta) {
   const Index m = static_cast<Index>(xi.size());
-  const Real mu = e / (2 * (1 + nu));
+  const Real mu = material::LinearElastic{e, nu}.mu();
   Eigen::MatrixXd exact(6, m), gradient(54, m);
   Eigen::VectorXd root(m), s(m);
   std::vector<Vec6> phi(static_cast<std::size_t>(m));
@@ -435,7 +437,7 @@ PlateFit fit_plate_family(const std::vector<Vec3>& xi, const std::vector<Real>& 
     }
     fit.exactness_error = response.cwiseAbs().maxCoeff();
   }
-  const Real c11 = e / (1 - nu * nu), c12 = nu * e / (1 - nu * nu);
+  const Real c11 = material::LinearElastic{e, nu}.plane_stress_modulus(), c12 = nu * e / (1 - nu * nu);
   // Bond moduli: same-layer bonds isotropic (half the in-plane shear); the vertical bonds half of E for
   // eps_zz (n_z^4 over all cross-layer bonds if the family has no vertical bond); every cross-layer bond a
   // small isotropic part (kPlateCrossFraction). The dilatation coupling completes the plane-stress law.
@@ -535,7 +537,7 @@ void PeridynamicBody::calibrate_plate() {
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
     const PlateFit& fit = fits[static_cast<std::size_t>(kind[static_cast<std::size_t>(i)])];
-    const Real mu = young_[i] / (2 * (1 + poisson_[i]));
+    const Real mu = material::LinearElastic{young_[i], poisson_[i]}.mu();
     kappa_[i] = classical_stiffness(i)(0, 1) - mu;
     coupling_[static_cast<std::size_t>(i)] = fit.q;
     for (Index b = first_bond(i); b < end_bond(i); ++b) {

@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include "core/error.hpp"
+#include "material/linear_elastic.hpp"
 
 namespace lamina::pd {
 
@@ -16,12 +17,7 @@ namespace {
 using Mat32 = Eigen::Matrix<Real, 3, 2>;
 using Mat6 = Eigen::Matrix<Real, 6, 6>;
 
-Mat3 plane_stress_voigt(Real e, Real nu) {
-  Mat3 c;
-  const Real f = e / (1 - nu * nu);
-  c << f, f * nu, 0, f * nu, f, 0, 0, 0, f * (1 - nu) / 2;
-  return c;
-}
+Mat3 plane_stress_voigt(Real e, Real nu) { return material::LinearElastic{e, nu}.plane_stress_matrix(); }
 
 }  // namespace
 
@@ -87,7 +83,7 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
                                    centre(0, i), centre(1, i), count));
     const int degree = gradient_weights(fam.first_bond(i), fam.end_bond(i), options.horizon);
     statistics_.fit_degree_min = std::min(statistics_.fit_degree_min, degree);
-    const Real mu = young_[i] / (2 * (1 + poisson_[i]));
+    const Real mu = material::LinearElastic{young_[i], poisson_[i]}.mu();
     for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b) {
       stabilizer_[b] = stabilization * mu * v_[b] / (xi_.col(b).squaredNorm() * sum_v);
       // bond shear: the non-affine transverse deformation, scaled by (t / |xi|)^2 so that its

@@ -163,7 +163,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // (|d sigma| / |d sigma_trial|), averaged over the section for the membrane and z^2-weighted for bending
   const bool plastic = material_.is_plastic();
   const Real E = material_.young_modulus(), nu = material_.poisson_ratio(), Gm = material_.shear_modulus();
-  const Real Ep = E / (1.0 - nu * nu);
+  const Real Ep = material::LinearElastic{E, nu}.plane_stress_modulus();
   Real tangent_membrane = 0.0, tangent_bending = 0.0, weight_membrane = 0.0, weight_bending = 0.0;
   const Real k = section_.shear_factor;
   for (int q = 0; q < nq; ++q) {

@@ -11,9 +11,9 @@ Real ShellMaterial::plate_wave_speed() const {
 }
 
 Real ShellMaterial::dilatational_wave_speed() const {
-  const Real E = young_modulus(), nu = poisson_ratio();
-  const Real bulk = E / (3.0 * (1.0 - 2.0 * nu));
-  const Real shear = E / (2.0 * (1.0 + nu));
+  const material::LinearElastic elastic{young_modulus(), poisson_ratio()};
+  const Real bulk = elastic.bulk_modulus();
+  const Real shear = elastic.mu();
   return std::sqrt((bulk + 4.0 * shear / 3.0) / density());
 }
 
@@ -21,8 +21,9 @@ LinearElasticShellMaterial::LinearElasticShellMaterial(Real young, Real poisson,
     : young_(young), poisson_(poisson), density_(density) {}
 
 Real LinearElasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
-  const Real c = young_ / (1.0 - poisson_ * poisson_);
-  const Real g = young_ / (2.0 * (1.0 + poisson_));
+  const material::LinearElastic elastic{young_, poisson_};
+  const Real c = elastic.plane_stress_modulus();
+  const Real g = elastic.mu();
   sigma[0] += dt * c * (rate[0] + poisson_ * rate[1]);
   sigma[1] += dt * c * (rate[1] + poisson_ * rate[0]);
   sigma[2] += dt * g * rate[2];
@@ -35,8 +36,8 @@ NeoHookeanShellMaterial::NeoHookeanShellMaterial(Real young, Real poisson, Real 
     : young_(young),
       poisson_(poisson),
       density_(density),
-      mu_(young / (2.0 * (1.0 + poisson))),
-      lambda_(young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson))) {}
+      mu_(material::LinearElastic{young, poisson}.mu()),
+      lambda_(material::LinearElastic{young, poisson}.lambda()) {}
 
 Real NeoHookeanShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
   Real* state = sigma + kStressComponents;  // H_xx, H_yy, H_xy, ln lambda_3
@@ -75,7 +76,8 @@ J2PlasticShellMaterial::J2PlasticShellMaterial(Real young, Real poisson, Real de
     : young_(young), poisson_(poisson), density_(density), yield_(yield), hardening_(hardening) {}
 
 Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
-  const Real E = young_, nu = poisson_, c = E / (1.0 - nu * nu), g = E / (2.0 * (1.0 + nu));
+  const material::LinearElastic elastic{young_, poisson_};
+  const Real E = young_, nu = poisson_, c = elastic.plane_stress_modulus(), g = elastic.mu();
   Real& eps_p = sigma[kStressComponents];
   const Real old_sum = sigma[0] + sigma[1];
   // elastic trial

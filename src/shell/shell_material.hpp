@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "core/types.hpp"
+#include "material/linear_elastic.hpp"
 
 namespace lamina::shell {
 
@@ -31,7 +32,7 @@ class ShellMaterial {
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
   virtual Real density() const = 0;
-  Real shear_modulus() const { return young_modulus() / (2.0 * (1.0 + poisson_ratio())); }
+  Real shear_modulus() const { return material::LinearElastic{young_modulus(), poisson_ratio()}.mu(); }
   /// Plane-stress dilatational wave speed sqrt(E / (rho (1 - nu^2))) (shell stable step).
   Real plate_wave_speed() const;
   /// 3D dilatational wave speed sqrt((K + 4G/3) / rho) of seed 000 eq (40).
