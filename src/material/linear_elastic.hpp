@@ -24,6 +24,8 @@ struct LinearElastic {
   Real p_wave_modulus() const { return lambda() + 2.0 * mu(); }
   /// Plane-stress modulus E / (1 - nu^2) (membrane stiffness per thickness, D = E' t^3 / 12).
   Real plane_stress_modulus() const { return E / (1.0 - nu * nu); }
+  /// Its off-diagonal term nu E / (1 - nu^2).
+  Real plane_stress_coupling() const { return nu * E / (1.0 - nu * nu); }
 
   /// 3 x 3 plane-stress matrix [xx yy xy] with engineering shear: E' [[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]].
   Mat3 plane_stress_matrix() const;

@@ -182,7 +182,7 @@ Eigen::MatrixXd PeridynamicBody::classical_stiffness(Index i) const {
   }
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3, 3);
   const bool stress = options_.kinematics == Kinematics::plane_stress;
-  const Real c11 = stress ? elastic.plane_stress_modulus() : lambda + 2 * mu, c12 = stress ? nu * e / (1 - nu * nu) : lambda;
+  const Real c11 = stress ? elastic.plane_stress_modulus() : lambda + 2 * mu, c12 = stress ? elastic.plane_stress_coupling() : lambda;
   c << c11, c12, 0, c12, c11, 0, 0, 0, mu;
   return c;
 }
@@ -437,7 +437,8 @@ PlateFit fit_plate_family(const std::vector<Vec3>& xi, const std::vector<Real>& 
     }
     fit.exactness_error = response.cwiseAbs().maxCoeff();
   }
-  const Real c11 = material::LinearElastic{e, nu}.plane_stress_modulus(), c12 = nu * e / (1 - nu * nu);
+  const material::LinearElastic elastic{e, nu};
+  const Real c11 = elastic.plane_stress_modulus(), c12 = elastic.plane_stress_coupling();
   // Bond moduli: same-layer bonds isotropic (half the in-plane shear); the vertical bonds half of E for
   // eps_zz (n_z^4 over all cross-layer bonds if the family has no vertical bond); every cross-layer bond a
   // small isotropic part (kPlateCrossFraction). The dilatation coupling completes the plane-stress law.
