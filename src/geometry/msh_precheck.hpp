@@ -23,10 +23,12 @@
 // - binary msh 4.1 $Entities: the counts fit in the file;
 // - refused, as lamina reads neither partitions nor data and Gmsh trusts their counts: $NodeData,
 //   $ElementData, $ElementNodeData; msh 2 $InterpolationScheme; msh 4 $Periodic, $GhostElements,
-//   $PartitionedEntities, $Parametrizations (msh 2 $Periodic is skipped by Gmsh: allowed).
+//   $PartitionedEntities, $Parametrizations (msh 2 $Periodic is skipped by Gmsh: allowed); msh 2
+//   $ParametricNodes (nodes classified on entities by tag: an unknown entity crashes libgmsh, G5).
 // Sections are found as Gmsh finds them: lines read in pieces of 255 (msh 2) or 1023 (msh 4)
 // bytes, the name a C string (up to a NUL byte) recognised by its prefix (msh 2 also $NO...,
-// $ELM...), other sections skipped to the first piece that continues with "End" + that name.
+// $ELM...); other sections skipped, in msh 2 to the next line starting with '$' (itself taken as a
+// section name, as _readMSH2 does), in msh 4 to the first piece that continues with "End" + that name.
 // Inside the checked sections: one entry per line (as Gmsh writes them), at most 255 characters
 // (msh 4 element lines 9990; msh 2 element lines any). Not checked: ASCII msh 4 $Entities and
 // the sections Gmsh stores as text.

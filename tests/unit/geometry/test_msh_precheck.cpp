@@ -88,6 +88,21 @@ TEST(MshPrecheck, G1NodeCountBelowTheNodeLinesIsAnInputErrorNotACrash) {
             std::string::npos);
 }
 
+TEST(MshPrecheck, G5ParametricNodesOfMsh2AreRefused) {
+  // binary msh 2.2 $ParametricNodes whose entities libgmsh does not know: SIGSEGV in
+  // GModel::_storeVerticesInEntities (fuzz/README.md, G5); the fuzzer's reproducer and the ASCII form
+  const std::string g5 = (kSeeds / "bad_g5_parametric22b.msh").string();
+  try {
+    precheck_msh_file(g5);
+    ADD_FAILURE() << "not refused";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), g5 + ":9:1: geometry.file: expected $Nodes (save the mesh without parametric "
+                                           "coordinates: Gmsh's Mesh.SaveParametric = 0), found '$ParametricNodes'");
+  }
+  const std::string ascii = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$ParametricNodes\n1\n1 0 0 0 3 1\n$EndParametricNodes\n";
+  EXPECT_NE(problem("parametric22.msh", ascii).find("parametric22.msh:4:1: geometry.file: expected $Nodes"), std::string::npos);
+}
+
 TEST(MshPrecheck, G2HugeCountsAreRefusedBeforeGmshAllocates) {
   const std::string text =
       "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 70000000000000 1 70000000000000\n"
