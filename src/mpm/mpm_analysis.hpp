@@ -2,24 +2,30 @@
 // Explicit CPDI2 material point method with Belytschko-Tsay shell domains (seed 000): the analysis
 // driver — explicit step eqs (1)-(14), adaptive time step eqs (38)-(40), quasi-static load levels.
 //
-// One explicit step, as an ordered list of stages (x^n, velocities at n-1/2):
-//  1. element stage: every BT domain updates its stresses with the node velocities that moved it
-//     to x^n and returns nodal forces/moments (eqs (17)-(37)); nodes gather them (no atomics).
-//  2. time step: dt = min(shell_safety * min_e L_e / c, alpha * cell / (c_dil + max |v_i|)) (eqs (38)-(40));
-//     mass-scaled quasi-static (mpm.mass_scaling: stiffness): dt = 1 with fictitious masses m_i = s/4 sum_j |K_ij| from
-//     the element tangents (seed 002 eq (5)), refreshed every level and every 1000 steps.
-//  3. external loads at the load factor / time; damping forces (mass-scaled: adaptive dynamic
-//     relaxation, c = 2 sqrt(u^T K u / u^T M u) on the level's increment, seed 002 eqs (6)-(7)); the residual.
-//  4. P2G (eqs (1)-(4)): grid mass, momentum and force m_I = sum_c S_I(x_c) m_c, ... (each free
-//     component separately, so a fixed component of a node adds nothing to the grid).
-//  5. grid update (eqs (5)-(7)): v_I = (p_I + dt f_I) / m_I; grid nodes without free mass stay at rest.
-//  6. G2P (eq (8)): v_c = sum_I S_I(x_c) v_I (PIC) blended with the FLIP update v_c + dt sum_I S_I a_I
-//     (options.flip; default 0 = PIC); prescribed components imposed at the nodes; rotations
-//     integrated at the nodes: omega += dt (m_ext - m_int) / I.
-//  7. kinetic-energy damping (quasi-static default): velocities are zeroed at each kinetic-energy peak.
-//  8. position update (eq (9)): x_c += dt sum_I S_I(x_c) v_I — the corners are shared by the domains,
-//     which therefore stay gap-free; grid connectivity refreshed.
-//  9. energies: internal (sigma:d), hourglass, kinetic, external work, damping.
+// One explicit step is an ordered list of named stages (NairnMPM's tasks; mpm_step_stages.cpp), each
+// timed into summary.json timing.stage_<name>_s; x^n and velocities at n-1/2 on entry:
+//  element      every BT domain updates its stresses with the node velocities that moved it to x^n and
+//               returns nodal forces/moments (eqs (17)-(37)); nodes gather them (no atomics); internal
+//               and hourglass energies.
+//  mass_scaling (mass-scaled quasi-static list only, mpm.mass_scaling: stiffness) fictitious masses
+//               m_i = 1/4 sum_j |K_ij| from the element tangents (seed 002 eq (5)), refreshed every level
+//               and every 1000 steps; adaptive damping c = 2 sqrt(u^T K u / u^T M u) on the level's
+//               increment (seed 002 eq (6)).
+//  time_step    dt = min(shell_safety * min_e L_e / c, alpha * cell / (c_dil + max |v_i|)) (eqs (38)-(40));
+//               dt = 1 with mass scaling (Gershgorin bound).
+//  loads        external loads at the load factor / time, damping forces, the residual ratio.
+//  p2g          (eqs (1)-(4)) grid mass, momentum and force m_I = sum_c S_I(x_c) m_c, ... (each free
+//               component separately, so a fixed component of a node adds nothing to the grid).
+//  grid         (eqs (5)-(7)) v_I = (p_I + dt f_I) / m_I (central adaptive damping: seed 002 eq (7));
+//               grid nodes without free mass stay at rest.
+//  g2p          (eq (8)) v_c = sum_I S_I(x_c) v_I (PIC) blended with the FLIP update v_c + dt sum_I S_I a_I
+//               (options.flip; default 0 = PIC); rotations integrated at the nodes, omega += dt (m_ext -
+//               m_int) / I; prescribed components imposed at the nodes.
+//  damping      kinetic-energy damping (quasi-static default: velocities zeroed at each kinetic-energy
+//               peak); damping, kinetic, external-work and transfer energies.
+//  update       (eq (9)) x_c += dt sum_I S_I(x_c) v_I (the corners are shared by the domains, which
+//               therefore stay gap-free); grid connectivity refreshed.
+// A variant of the step is another list (step_stages), not an edit inside one long function.
 #include <array>
 #include <map>
 #include <memory>
@@ -103,6 +109,32 @@ class MpmAnalysis : public Analysis {
   Real adaptive_damping_coefficient() const;
   /// Start of a quasi-static level: the increment of the damping estimate restarts, the masses are refreshed.
   void begin_level();
+
+  /// One named stage of the explicit step: a member function run in list order by advance().
+  struct StepStage {
+    const char* name;
+    void (MpmAnalysis::*run)();
+  };
+  /// The ordered stages of one step; mass_scaled adds the fictitious-mass stage after the element stage.
+  static std::vector<StepStage> step_stages(bool mass_scaled);
+  void stage_element_forces();
+  void stage_mass_scaling();
+  void stage_time_step();
+  void stage_loads_and_residual();
+  void stage_particle_to_grid();
+  void stage_grid_update();
+  void stage_grid_to_particle();
+  void stage_damping_and_energy();
+  void stage_position_update();
+  /// What one stage hands to the next within a step (set afresh by advance()).
+  struct StepContext {
+    Real dt = 0;               // this step's size
+    Real damping = 0;          // c of the mass-proportional (or central adaptive) damping
+    bool central_damping = false;
+    Real keep = 1, divide = 1;  // central damping factors 1 -/+ c dt / 2
+  };
+  std::vector<StepStage> stages_;
+  StepContext step_;
 
   MpmProblem problem_;
   std::vector<Probe> probes_;

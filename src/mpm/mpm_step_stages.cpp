@@ -1,0 +1,251 @@
+// The explicit step of MpmAnalysis as an ordered list of named stages (NairnMPM's "tasks"): each
+// stage is one member function, advance() runs the list and times every stage (summary.json
+// timing.stage_<name>_s). The mass-scaled quasi-static list has one more stage; see mpm_analysis.hpp.
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+#include "mpm/mpm_analysis.hpp"
+
+namespace lamina::mpm {
+
+namespace {
+// mass scaling: the fictitious masses are recomputed from the current tangent this often (and at each level)
+constexpr Index kMassRefreshSteps = 1000;
+}  // namespace
+
+std::vector<MpmAnalysis::StepStage> MpmAnalysis::step_stages(bool mass_scaled) {
+  std::vector<StepStage> stages{{"element", &MpmAnalysis::stage_element_forces}};
+  if (mass_scaled) stages.push_back({"mass_scaling", &MpmAnalysis::stage_mass_scaling});
+  for (StepStage s : std::initializer_list<StepStage>{{"time_step", &MpmAnalysis::stage_time_step},
+                                                       {"loads", &MpmAnalysis::stage_loads_and_residual},
+                                                       {"p2g", &MpmAnalysis::stage_particle_to_grid},
+                                                       {"grid", &MpmAnalysis::stage_grid_update},
+                                                       {"g2p", &MpmAnalysis::stage_grid_to_particle},
+                                                       {"damping", &MpmAnalysis::stage_damping_and_energy},
+                                                       {"update", &MpmAnalysis::stage_position_update}})
+    stages.push_back(s);
+  return stages;
+}
+
+Real MpmAnalysis::advance(Real load) {
+  current_load_ = load;
+  step_ = StepContext{};
+  for (const StepStage& stage : stages_) {
+    const double start = omp_get_wtime();
+    (this->*stage.run)();
+    stage_seconds_[stage.name] += omp_get_wtime() - start;
+  }
+  dt_previous_ = step_.dt;
+  time_ += step_.dt;
+  ++steps_;
+  return step_.dt;
+}
+
+// 1. element stage: stresses advanced over the step that brought the nodes to x^n; nodal forces gathered.
+void MpmAnalysis::stage_element_forces() {
+  compute_internal_forces(dt_previous_);
+  energy_.internal += dt_previous_ * element_power_.sum();
+  energy_.hourglass += dt_previous_ * element_hourglass_power_.sum();
+}
+
+// 1b. mass-scaled quasi-static only: fictitious masses refreshed, adaptive damping estimate.
+void MpmAnalysis::stage_mass_scaling() {
+  if (masses_stale_ || masses_age_ >= kMassRefreshSteps) compute_fictitious_masses();
+  ++masses_age_;
+  if (problem_.options.adaptive_damping) adaptive_c_ = steps_ > 0 ? adaptive_damping_coefficient() : 0.0;
+  f_int_previous_ = f_int_;
+  m_int_previous_ = m_int_;
+}
+
+// 2. time step (eqs (38)-(40)) combined with the shell stable step.
+void MpmAnalysis::stage_time_step() {
+  const MpmOptions& o = problem_.options;
+  const Real vmax = vpos_.cwiseAbs().maxCoeff();
+  if (!std::isfinite(vmax) || vmax > node_velocity_limit())
+    throw AnalysisError(fmt::format("unstable: a node velocity of {:.3g} exceeds 10 x the wave speed ({:.3g}) at step {} "
+                                    "(time {:.6g}); reduce mpm.time_step",
+                                    vmax, wave_speed_, steps_, time_));
+  const Real dt_grid = o.alpha * grid_.cell() / (wave_speed_ + vmax);
+  const Real dt_shell = o.shell_safety * element_->stable_time_step(element_length_.minCoeff());
+  Real dt = std::min(dt_grid, dt_shell);
+  dt_control_ = dt_grid < dt_shell ? "grid" : "shell";
+  if (o.fixed_time_step > 0) {
+    dt = o.fixed_time_step;
+    dt_control_ = "fixed";
+  }
+  if (scaled_) {  // the fictitious masses make dt = 1 stable (Gershgorin bound)
+    dt = 1.0;
+    dt_control_ = "mass_scaling";
+  }
+  if (!(dt > 0) || !std::isfinite(dt)) throw AnalysisError(fmt::format("time step {} at step {}: degenerate elements", dt, steps_));
+  dt_ = step_.dt = dt;
+}
+
+// 3. external forces, damping, residual.
+void MpmAnalysis::stage_loads_and_residual() {
+  const MpmOptions& o = problem_.options;
+  const Index n = x_.cols();
+  compute_external_forces(current_load_);
+  const Real c = scaled_ && o.adaptive_damping ? adaptive_c_ : o.mass_damping;
+  step_.damping = c;
+  f_net_ = f_ext_ - f_int_;
+  m_net_ = m_ext_ - m_int_;
+  {
+    Real r2 = 0, ext2 = 0, int2 = 0;
+    for (Index i = 0; i < n; ++i) {
+      r2 += f_net_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+            m_net_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+      ext2 += f_ext_.col(i).squaredNorm() / mass_[i] + m_ext_.col(i).squaredNorm() / inertia_[i];
+      int2 += f_int_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+              m_int_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+    }
+    if (scaled_ && o.adaptive_damping && c > 0) {
+      // adaptive damping: the damping force c m v joins the imbalance, so that a node swinging through
+      // equilibrium (zero residual at full velocity) does not end the level
+      for (Index i = 0; i < n; ++i)
+        r2 += (c * dyn_mass_[i]) * (c * dyn_mass_[i]) * v_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+              (c * dyn_inertia_[i]) * (c * dyn_inertia_[i]) * omega_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+    }
+    const Real scale = std::max({ext2, int2, std::numeric_limits<Real>::min()});
+    residual_ratio_ = std::sqrt(r2 / scale);
+  }
+  // adaptive damping is central (seed 002 eq (7)): v^{n+1/2} = ((1 - c dt/2) v^{n-1/2} + dt f / m) / (1 + c dt/2),
+  // applied in the grid update and the rotation update (an explicit -c m v^{n-1/2} would shrink the
+  // stable step to omega^2 dt^2 < 4 - 2 c dt)
+  const Real dt = step_.dt;
+  step_.central_damping = scaled_ && o.adaptive_damping;
+  step_.keep = step_.central_damping ? 1.0 - 0.5 * c * dt : 1.0;
+  step_.divide = step_.central_damping ? 1.0 + 0.5 * c * dt : 1.0;
+  if (c > 0 && !step_.central_damping) {
+    for (Index i = 0; i < n; ++i) {
+      f_net_.col(i) -= c * dyn_mass_[i] * v_.col(i);
+      m_net_.col(i) -= c * dyn_inertia_[i] * omega_.col(i);
+    }
+  }
+}
+
+// 4. P2G: mass, momentum and force per free component (eqs (1)-(4); work arrays are members, reused
+// across steps: no per-step allocation).
+void MpmAnalysis::stage_particle_to_grid() {
+  const Index n = x_.cols();
+  if (node_mass_.cols() != n) node_mass_ = (Eigen::Matrix3Xd::Ones(3, n).array().rowwise() * dyn_mass_.transpose().array()).matrix();
+  momentum_.resize(3, n);
+  for (Index i = 0; i < n; ++i) momentum_.col(i) = dyn_mass_[i] * v_.col(i);
+  grid_.scatter(node_mass_, free_, grid_mass_);
+  grid_.scatter(momentum_, free_, grid_momentum_);
+  grid_.scatter(f_net_, free_, grid_force_);
+}
+
+// 5. grid update (eqs (5)-(7)); grid nodes without free mass stay at rest.
+void MpmAnalysis::stage_grid_update() {
+  const Real dt = step_.dt, keep = step_.keep, divide = step_.divide;
+  const bool central_damping = step_.central_damping;
+  const Eigen::Matrix3Xd &grid_mass = grid_mass_, &grid_momentum = grid_momentum_, &grid_force = grid_force_;
+  Eigen::Matrix3Xd &grid_velocity = grid_velocity_, &grid_acceleration = grid_acceleration_;
+  grid_velocity.resize(3, grid_mass.cols());
+  grid_acceleration.resize(3, grid_mass.cols());
+  const Index slots = grid_mass.cols();
+#pragma omp parallel for schedule(static) if (slots > 4096)
+  for (Index s = 0; s < slots; ++s)
+    for (int a = 0; a < 3; ++a) {
+      const Real m = grid_mass(a, s);
+      if (m > 0) {
+        if (central_damping) {
+          grid_velocity(a, s) = (keep * grid_momentum(a, s) + dt * grid_force(a, s)) / (divide * m);
+          grid_acceleration(a, s) = (grid_velocity(a, s) - grid_momentum(a, s) / m) / dt;
+        } else {
+          grid_acceleration(a, s) = grid_force(a, s) / m;
+          grid_velocity(a, s) = (grid_momentum(a, s) + dt * grid_force(a, s)) / m;
+        }
+      } else {
+        grid_acceleration(a, s) = grid_velocity(a, s) = 0.0;  // no free mass: fixed grid node (eq (7))
+      }
+    }
+}
+
+// 6. G2P velocities (eq (8), PIC blended with FLIP by options.flip); rotations integrated at the nodes;
+// prescribed components imposed.
+void MpmAnalysis::stage_grid_to_particle() {
+  const Index n = x_.cols();
+  const Real dt = step_.dt, keep = step_.keep, divide = step_.divide;
+  const bool central_damping = step_.central_damping;
+  const Eigen::Matrix3Xd& m_net = m_net_;
+  PointMatrix &v_pic = v_pic_, &a_grid = a_grid_;
+  grid_.gather(grid_velocity_, v_pic);
+  grid_.gather(grid_acceleration_, a_grid);
+  const Real flip = problem_.options.flip;
+  transfer_loss_.setZero(n);
+#pragma omp parallel for schedule(static) if (n > 1024)
+  for (Index i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      if (free_(a, i) > 0) {
+        const Real v_flip = v_(a, i) + dt * a_grid(a, i);
+        v_(a, i) = flip * v_flip + (1.0 - flip) * v_pic(a, i);
+        transfer_loss_[i] += 0.5 * dyn_mass_[i] * (v_flip * v_flip - v_(a, i) * v_(a, i));
+        vpos_(a, i) = v_pic(a, i);
+      } else {
+        v_(a, i) = vpos_(a, i) = 0.0;
+      }
+      if (central_damping)
+        omega_(a, i) = rotation_free_(a, i) > 0 ? (keep * omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i]) / divide : 0.0;
+      else
+        omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
+    }
+  }
+  apply_prescribed(current_load_);
+}
+
+// 7. damping bookkeeping, kinetic-energy damping, external work, kinetic and transfer energies.
+void MpmAnalysis::stage_damping_and_energy() {
+  const MpmOptions& o = problem_.options;
+  const Index n = x_.cols();
+  const Real dt = step_.dt, c = step_.damping;
+  Real kinetic = 0.0;
+  for (Index i = 0; i < n; ++i) kinetic += 0.5 * (dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm());
+  if (c > 0) {
+    Real p = 0;
+    for (Index i = 0; i < n; ++i) p += c * (dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm());
+    energy_.damping += dt * p;
+  }
+  // kinetic damping: the option, or the fallback of adaptive damping where its estimate is zero (a
+  // negative local stiffness, e.g. past a limit point: the motion would stay undamped)
+  const bool kinetic_on = o.kinetic_damping || (scaled_ && o.adaptive_damping && c == 0.0);
+  if (kinetic_on && kinetic < kinetic_previous_) {
+    energy_.damping += kinetic;
+    for (Index i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) {
+        if (free_(a, i) > 0) v_(a, i) = vpos_(a, i) = 0.0;
+        omega_(a, i) = 0.0;
+      }
+    kinetic_previous_ = 0.0;
+    kinetic = 0.0;
+    for (Index i = 0; i < n; ++i) kinetic += 0.5 * dyn_mass_[i] * v_.col(i).squaredNorm();
+  } else {
+    kinetic_previous_ = kinetic;
+  }
+  // external work over this step (loads at n, displacement with the velocity that moves the nodes,
+  // after kinetic damping: a step whose velocities were zeroed at a peak moves nothing and does no work)
+  {
+    Real w = 0;
+    for (Index i = 0; i < n; ++i) w += f_ext_.col(i).dot(vpos_.col(i)) + m_ext_.col(i).dot(omega_.col(i));
+    energy_.external += dt * w;
+  }
+  energy_.kinetic = kinetic;
+  energy_.transfer += transfer_loss_.sum();
+}
+
+// 8. positions (eq (9)) and grid connectivity; a non-finite energy stops the run.
+void MpmAnalysis::stage_position_update() {
+  x_ += step_.dt * vpos_;
+  if (scaled_) theta_ += step_.dt * omega_;
+  grid_.locate(x_);
+  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
+    throw AnalysisError(fmt::format("non-finite energy at step {} (time {:.6g}): the run is unstable", steps_, time_));
+}
+
+}  // namespace lamina::mpm
