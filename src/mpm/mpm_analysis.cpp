@@ -136,6 +136,7 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
     f_int_previous_ = m_int_previous_ = Eigen::Matrix3Xd::Zero(3, n);
   }
   stages_ = step_stages(scaled_);
+  stage_time_.assign(stages_.size(), 0.0);
   energy_.kinetic = energy_.initial_kinetic = 0.5 * (v_.colwise().squaredNorm() * dyn_mass_)(0);
 }
 

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "core/analysis.hpp"
+#include "core/step_stage.hpp"
 #include "mpm/background_grid.hpp"
 #include "mpm/cpdi2_domains.hpp"
 #include "mpm/mpm_problem.hpp"
@@ -110,13 +111,9 @@ class MpmAnalysis : public Analysis {
   /// Start of a quasi-static level: the increment of the damping estimate restarts, the masses are refreshed.
   void begin_level();
 
-  /// One named stage of the explicit step: a member function run in list order by advance().
-  struct StepStage {
-    const char* name;
-    void (MpmAnalysis::*run)();
-  };
-  /// The ordered stages of one step; mass_scaled adds the fictitious-mass stage after the element stage.
-  static std::vector<StepStage> step_stages(bool mass_scaled);
+  /// The ordered stages of one step (core/step_stage.hpp); mass_scaled adds the fictitious-mass stage
+  /// after the element stage.
+  std::vector<StepStage> step_stages(bool mass_scaled);
   void stage_element_forces();
   void stage_mass_scaling();
   void stage_time_step();
@@ -134,6 +131,7 @@ class MpmAnalysis : public Analysis {
     Real keep = 1, divide = 1;  // central damping factors 1 -/+ c dt / 2
   };
   std::vector<StepStage> stages_;
+  std::vector<Real> stage_time_;  // seconds per entry of stages_
   StepContext step_;
 
   MpmProblem problem_;
@@ -185,7 +183,6 @@ class MpmAnalysis : public Analysis {
   std::vector<int> unconverged_levels_;   // quasi-static levels that hit max_steps_per_level
   std::vector<Real> level_residual_;      // residual ratio at each recorded load level
   EnergyBalance energy_;
-  std::map<std::string, Real> stage_seconds_;
   // where run() is (checkpointed): quasi-static level and its steps, or the next output point
   struct RunLoop {
     int level = 1;

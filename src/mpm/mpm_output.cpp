@@ -183,7 +183,7 @@ RunCounts MpmAnalysis::counts() const {
 
 std::map<std::string, Real> MpmAnalysis::timings() const {
   std::map<std::string, Real> t;
-  for (const auto& [name, seconds] : stage_seconds_) t[name + "_s"] = seconds;
+  for (std::size_t k = 0; k < stages_.size(); ++k) t[std::string(stages_[k].name) + "_s"] = stage_time_[k];
   return t;
 }
 

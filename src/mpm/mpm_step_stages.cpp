@@ -2,7 +2,6 @@
 // stage is one member function, advance() runs the list and times every stage (summary.json
 // timing.stage_<name>_s). The mass-scaled quasi-static list has one more stage; see mpm_analysis.hpp.
 #include <fmt/format.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -18,28 +17,23 @@ namespace {
 constexpr Index kMassRefreshSteps = 1000;
 }  // namespace
 
-std::vector<MpmAnalysis::StepStage> MpmAnalysis::step_stages(bool mass_scaled) {
-  std::vector<StepStage> stages{{"element", &MpmAnalysis::stage_element_forces}};
-  if (mass_scaled) stages.push_back({"mass_scaling", &MpmAnalysis::stage_mass_scaling});
-  for (StepStage s : std::initializer_list<StepStage>{{"time_step", &MpmAnalysis::stage_time_step},
-                                                       {"loads", &MpmAnalysis::stage_loads_and_residual},
-                                                       {"p2g", &MpmAnalysis::stage_particle_to_grid},
-                                                       {"grid", &MpmAnalysis::stage_grid_update},
-                                                       {"g2p", &MpmAnalysis::stage_grid_to_particle},
-                                                       {"damping", &MpmAnalysis::stage_damping_and_energy},
-                                                       {"update", &MpmAnalysis::stage_position_update}})
-    stages.push_back(s);
+std::vector<StepStage> MpmAnalysis::step_stages(bool mass_scaled) {
+  std::vector<StepStage> stages{{"element", [this] { stage_element_forces(); }}};
+  if (mass_scaled) stages.push_back({"mass_scaling", [this] { stage_mass_scaling(); }});
+  stages.insert(stages.end(), {{"time_step", [this] { stage_time_step(); }},
+                               {"loads", [this] { stage_loads_and_residual(); }},
+                               {"p2g", [this] { stage_particle_to_grid(); }},
+                               {"grid", [this] { stage_grid_update(); }},
+                               {"g2p", [this] { stage_grid_to_particle(); }},
+                               {"damping", [this] { stage_damping_and_energy(); }},
+                               {"update", [this] { stage_position_update(); }}});
   return stages;
 }
 
 Real MpmAnalysis::advance(Real load) {
   current_load_ = load;
   step_ = StepContext{};
-  for (const StepStage& stage : stages_) {
-    const double start = omp_get_wtime();
-    (this->*stage.run)();
-    stage_seconds_[stage.name] += omp_get_wtime() - start;
-  }
+  run_stages(stages_, stage_time_);
   dt_previous_ = step_.dt;
   time_ += step_.dt;
   ++steps_;
