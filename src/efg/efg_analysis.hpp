@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "core/analysis.hpp"
+#include "core/step_stage.hpp"
 #include "efg/background_quadrature.hpp"
 #include "efg/efg_problem.hpp"
 #include "efg/essential_boundary.hpp"
@@ -87,7 +88,14 @@ class EfgAnalysis : public Analysis {
   void assign_materials();
   void build_constraints();
   void build_loads();
-  void assemble_and_solve(OutputSink* sink);
+  /// The ordered stages of the static analysis (core/step_stage.hpp): set-up, materials, constraints,
+  /// loads, then assemble / linear_solve / energy (galerkin) or strong_form, then post; each timed
+  /// into timings <name>_s. run() and solve() run this list.
+  std::vector<StepStage> stages(OutputSink* sink);
+  void run_static(OutputSink* sink);
+  void assemble_galerkin(OutputSink* sink);
+  void solve_galerkin(OutputSink* sink);
+  void galerkin_energies();
   /// Collocation / weighted least squares (efg.formulation): strong-form rows at the nodes, solve,
   /// then reactions (traction sigma(u^h) n integrated over the constrained surfaces) and energies.
   void solve_strong_form(OutputSink* sink);
@@ -139,6 +147,17 @@ class EfgAnalysis : public Analysis {
   Eigen::Matrix3Xd node_displacement_;
   Eigen::Matrix<Real, 6, Eigen::Dynamic> node_strain_, node_stress_;
   std::vector<int> node_material_;
+  /// The assembled Galerkin system between the assemble, linear_solve and energy stages (released after).
+  struct GalerkinSystem {
+    solve::SparseMatrix K;        // upper triangle when symmetric
+    Eigen::VectorXd f;
+    bool symmetric = true;
+    std::vector<mls::ShapeFunctionValues> constraint_shapes;  // at the constraint points (first derivatives)
+    std::vector<Eigen::Triplet<Real>> multiplier_entries;     // Lagrange: rows 3N + k of the constraint matrix
+    Eigen::VectorXd multiplier_rhs;
+    Index multipliers = 0;
+  };
+  std::unique_ptr<GalerkinSystem> system_;
   solve::SolverReport solver_report_;
   std::map<std::string, Real> timings_;
   bool solved_ = false;

@@ -11,6 +11,7 @@
 #include "efg/background_quadrature.hpp"
 #include "efg/collocation_system.hpp"
 #include "efg/efg_analysis.hpp"
+#include "efg/nodal_field.hpp"
 #include "efg/weighted_least_squares_system.hpp"
 
 namespace lamina::efg {
@@ -24,19 +25,6 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 /// is tested: an edge node then belongs to a face's load only if the selection holds on that face
 /// itself (a `where: x > 4 - 1e-9` load holds on the face x = 4, not on the side faces it touches).
 constexpr Real kFaceNudge = 1e-3;
-
-Vec3 value_of(const mls::ShapeFunctionValues& sv, const Eigen::VectorXd& u) {
-  Vec3 v = Vec3::Zero();
-  for (std::size_t k = 0; k < sv.neighbours.size(); ++k) v += sv.phi[static_cast<Index>(k)] * u.segment<3>(3 * sv.neighbours[k]);
-  return v;
-}
-
-Mat3 gradient_of(const mls::ShapeFunctionValues& sv, const Eigen::VectorXd& u) {
-  Mat3 G = Mat3::Zero();
-  for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
-    G += u.segment<3>(3 * sv.neighbours[k]) * sv.dphi.col(static_cast<Index>(k)).transpose();
-  return G;
-}
 
 }  // namespace
 

@@ -1,0 +1,309 @@
+// EfgAnalysis, Galerkin formulation (seed 004 eqs 1-30..1-33): the assemble, solve and energy stages.
+// assemble: neighbours per background cell (and VCI integrals), the projected volumetric term, the
+// block pattern, the volume stiffness and loads, the penalty scale and the constraint terms (penalty,
+// Nitsche or Lagrange multipliers); solve: CHOLMOD (symmetric) or the general solver; energy: strain
+// energy, Clapeyron external work and the constraint reactions.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iterator>
+
+#include "core/error.hpp"
+#include "efg/efg_analysis.hpp"
+#include "efg/galerkin_assembly.hpp"
+#include "efg/nodal_field.hpp"
+#include "solve/block_pattern.hpp"
+
+namespace lamina::efg {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+}  // namespace
+
+void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
+  system_ = std::make_unique<GalerkinSystem>();
+  GalerkinSystem& system = *system_;
+  const Index n = problem_.cloud.size();
+  const auto& options = problem_.options;
+  const bool vci = options.correction == IntegrationCorrection::vci;
+  const bool lagrange = options.essential == EssentialMethod::lagrange;
+  auto progress = [&](Real fraction, const std::string& status) {
+    if (sink) sink->progress(fraction, status);
+  };
+
+  // pass 1: neighbours per cell (and VCI integrals)
+  auto start = Clock::now();
+  VolumeIntegrals integrals, reduced_integrals;
+  const bool reduced = reduced_.size() > 0;
+  std::vector<IndexList> groups;
+  std::vector<IndexList> cell_nodes = cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, &groups);
+  if (reduced) {
+    const std::vector<IndexList> extra = cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, &groups);
+    IndexList merged;
+    for (std::size_t c = 0; c < cell_nodes.size(); ++c) {
+      merged.clear();
+      std::set_union(cell_nodes[c].begin(), cell_nodes[c].end(), extra[c].begin(), extra[c].end(), std::back_inserter(merged));
+      cell_nodes[c].swap(merged);
+    }
+  }
+  Eigen::Matrix3Xd xi, xi_reduced;
+  if (vci) {
+    Eigen::Matrix3Xd boundary = Eigen::Matrix3Xd::Zero(3, n);
+    const auto values = shapes_->evaluate_all(surface_.points, 0);
+    for (Index s = 0; s < surface_.size(); ++s) {
+      const auto& sv = values[static_cast<std::size_t>(s)];
+      for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
+        boundary.col(sv.neighbours[k]) += surface_.weights[s] * sv.phi[static_cast<Index>(k)] * surface_.normals.col(s);
+    }
+    xi = vci_correction(integrals, boundary);
+    if (reduced) xi_reduced = vci_correction(reduced_integrals, boundary);
+  }
+  timings_["neighbours_s"] = seconds_since(start);
+  progress(0.2, "neighbours");
+
+  // projected volumetric term (efg.integration.volumetric: projected): G, M and lambda per pressure node
+  const bool projected = problem_.options.projected_volumetric;
+  if (projected) {
+    start = Clock::now();
+    Eigen::VectorXd lambda(volume_.size());
+    for (Index q = 0; q < volume_.size(); ++q)
+      lambda[q] = materials_[static_cast<std::size_t>(material_of_point_[static_cast<std::size_t>(q)])].lambda();
+    projection_ = std::make_unique<ProjectedVolumetric>(project_volumetric(*shapes_, *pressure_, volume_, lambda));
+    for (const auto& list : projection_->nodes) groups.push_back(list);
+    timings_["projection_s"] = seconds_since(start);
+  }
+
+  // shape functions at the constraint points
+  start = Clock::now();
+  PointMatrix constraint_x(3, static_cast<Index>(constraint_points_.size()));
+  for (std::size_t i = 0; i < constraint_points_.size(); ++i) constraint_x.col(static_cast<Index>(i)) = constraint_points_[i].x;
+  system.constraint_shapes = shapes_->evaluate_all(constraint_x, 1);
+  const auto& constraint_shapes = system.constraint_shapes;
+
+  // pattern
+  if (!lagrange)
+    for (const auto& sv : constraint_shapes) groups.push_back(sv.neighbours);
+  const bool symmetric = system.symmetric = !vci;
+  solve::BlockPattern pattern(n, 3, groups, symmetric);
+  groups.clear();
+  groups.shrink_to_fit();
+  timings_["pattern_s"] = seconds_since(start);
+  progress(0.3, "pattern");
+
+  // volume stiffness
+  start = Clock::now();
+  system.K = pattern.zero_matrix();
+  Real* values = system.K.valuePtr();
+  system.f = Eigen::VectorXd::Zero(3 * n);
+  Eigen::VectorXd& f = system.f;
+  VolumeAssembly input;
+  input.shapes = shapes_.get();
+  input.quadrature = &volume_;
+  input.cell_nodes = &cell_nodes;
+  input.material_of_point = &material_of_point_;
+  input.materials = projected ? &deviatoric_materials_ : &materials_;
+  input.body_force = body_force_.cols() == volume_.size() ? &body_force_ : nullptr;
+  input.vci = vci ? &xi : nullptr;
+  if (reduced) {
+    input.reduced = &reduced_;
+    input.material_of_reduced_point = &material_of_reduced_point_;
+    input.vci_reduced = vci ? &xi_reduced : nullptr;
+  }
+  const VolumeAssemblyReport volume_report = assemble_volume(input, pattern, values, f);
+  const Real volume_seconds = seconds_since(start);
+  timings_["assembly_volume_s"] = volume_seconds;
+  timings_["assembly_direct_writes"] = volume_report.direct ? 1.0 : 0.0;
+  timings_["gauss_points_per_second"] =
+      static_cast<Real>(volume_.size()) / std::max(volume_seconds + timings_["neighbours_s"], 1e-12);
+  progress(0.6, "assembled");
+
+  // loads
+  start = Clock::now();
+  {
+    PointMatrix load_x(3, static_cast<Index>(point_loads_.size()));
+    for (std::size_t i = 0; i < point_loads_.size(); ++i) load_x.col(static_cast<Index>(i)) = point_loads_[i].x;
+    const auto load_shapes = shapes_->evaluate_all(load_x, 0);
+    for (std::size_t i = 0; i < point_loads_.size(); ++i) {
+      const auto& sv = load_shapes[i];
+      for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
+        f.segment<3>(3 * sv.neighbours[k]) += sv.phi[static_cast<Index>(k)] * point_loads_[i].force;
+    }
+  }
+  f_loads_ = f;
+
+  // penalty scale: max diagonal of the volume stiffness over max nodal sum of w phi^2
+  Real max_diagonal = 0;
+  for (Index d = 0; d < 3 * n; ++d) {
+    const Index p = pattern.position(d, d);
+    if (p >= 0) max_diagonal = std::max(max_diagonal, std::abs(values[p]));
+  }
+  {
+    Eigen::VectorXd surface_sum = Eigen::VectorXd::Zero(n), point_sum = Eigen::VectorXd::Zero(n);
+    for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
+      const auto& sv = constraint_shapes[i];
+      Eigen::VectorXd& sum = constraint_points_[i].surface ? surface_sum : point_sum;
+      for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
+        sum[sv.neighbours[k]] += constraint_points_[i].weight * sv.phi[static_cast<Index>(k)] * sv.phi[static_cast<Index>(k)];
+    }
+    const Real s_max = surface_sum.size() ? surface_sum.maxCoeff() : 0.0, p_max = point_sum.size() ? point_sum.maxCoeff() : 0.0;
+    // scale with Young's modulus rather than the P-wave modulus lambda + 2 mu that dominates the
+    // diagonal: a nearly incompressible body would otherwise get a penalty ~ lambda and lock at the
+    // constrained faces
+    Real stiffest = 0.0, ratio = 1.0;
+    for (std::size_t i = 0; i < materials_.size(); ++i) {
+      const auto& m = materials_[i];
+      const Real assembled = projected ? deviatoric_materials_[i].p_wave_modulus() : m.p_wave_modulus();
+      if (m.p_wave_modulus() > stiffest) {
+        stiffest = m.p_wave_modulus();
+        ratio = m.E / assembled;
+      }
+    }
+    max_diagonal *= ratio;
+    alpha_surface_ = options.penalty ? *options.penalty : (s_max > 0 ? options.penalty_factor * max_diagonal / s_max : 0.0);
+    alpha_point_ = options.penalty ? *options.penalty : (p_max > 0 ? options.penalty_factor * max_diagonal / p_max : 0.0);
+  }
+  timings_["penalty_surface"] = alpha_surface_;
+  timings_["penalty_point"] = alpha_point_;
+  // after the penalty scale, which is taken from the mu part (a lambda-sized penalty locks the constrained faces)
+  if (projected) {
+    const auto projection_start = Clock::now();
+    projection_->add_stiffness(pattern, values);  // K += G^T diag(lambda_I / M_I) G
+    timings_["projection_s"] += seconds_since(projection_start);
+  }
+
+  // constraint terms
+  Eigen::MatrixXd Kc;
+  Eigen::VectorXd fc;
+  auto& multiplier_entries = system.multiplier_entries;
+  Eigen::VectorXd& multiplier_rhs = system.multiplier_rhs;
+  Index& multipliers = system.multipliers;
+  if (lagrange) {
+    for (const auto& p : constraint_points_)
+      for (int a = 0; a < 3; ++a) multipliers += p.constrained[static_cast<std::size_t>(a)] ? 1 : 0;
+    multiplier_rhs.resize(multipliers);
+    Index row = 0;
+    for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
+      const auto& p = constraint_points_[i];
+      const auto& sv = constraint_shapes[i];
+      for (int a = 0; a < 3; ++a) {
+        if (!p.constrained[static_cast<std::size_t>(a)]) continue;
+        for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
+          multiplier_entries.emplace_back(static_cast<int>(3 * n + row), static_cast<int>(3 * sv.neighbours[k] + a),
+                                          sv.phi[static_cast<Index>(k)]);
+        multiplier_rhs[row] = p.value[a];
+        ++row;
+      }
+    }
+  } else {
+    for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
+      const auto& p = constraint_points_[i];
+      const auto& sv = constraint_shapes[i];
+      if (options.essential == EssentialMethod::nitsche && p.surface) {
+        const auto& mat = materials_[static_cast<std::size_t>(p.material)];
+        const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
+        nitsche_terms(sv, p, mat, beta, Kc, fc);
+      } else {
+        penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
+      }
+      pattern.scatter(sv.neighbours, Kc, values);
+      scatter_vector(sv, fc, f);
+    }
+  }
+  timings_["assembly_boundary_s"] = seconds_since(start);
+  timings_["assembly_s"] = timings_["neighbours_s"] + timings_["pattern_s"] + volume_seconds + timings_["assembly_boundary_s"] +
+                          (projected ? timings_["projection_s"] : 0.0);
+  progress(0.7, "solving");
+}
+
+void EfgAnalysis::solve_galerkin(OutputSink* sink) {
+  const Index n = problem_.cloud.size();
+  const bool lagrange = problem_.options.essential == EssentialMethod::lagrange;
+  GalerkinSystem& system = *system_;
+  const solve::SparseMatrix& K = system.K;
+  const Eigen::VectorXd& f = system.f;
+  const bool symmetric = system.symmetric;
+  const Index multipliers = system.multipliers;
+  auto start = Clock::now();
+  timings_["dofs"] = static_cast<Real>(3 * n + multipliers);
+  timings_["nonzeros"] = static_cast<Real>(K.nonZeros());
+  if (lagrange) {
+    std::vector<Eigen::Triplet<Real>> entries;
+    entries.reserve(static_cast<std::size_t>(symmetric ? 2 * K.nonZeros() : K.nonZeros()) + 2 * system.multiplier_entries.size());
+    for (Index col = 0; col < K.outerSize(); ++col)
+      for (solve::SparseMatrix::InnerIterator it(K, col); it; ++it) {
+        entries.emplace_back(static_cast<int>(it.row()), static_cast<int>(col), it.value());
+        if (symmetric && it.row() != col) entries.emplace_back(static_cast<int>(col), static_cast<int>(it.row()), it.value());
+      }
+    for (const auto& t : system.multiplier_entries) {
+      entries.push_back(t);
+      entries.emplace_back(t.col(), t.row(), t.value());
+    }
+    solve::SparseMatrix A(3 * n + multipliers, 3 * n + multipliers);
+    A.setFromTriplets(entries.begin(), entries.end());
+    Eigen::VectorXd rhs(3 * n + multipliers);
+    rhs << f, system.multiplier_rhs;
+    const Eigen::VectorXd x = solve::solve_general(A, rhs, solver_report_);
+    u_ = x.head(3 * n);
+    multipliers_ = x.tail(multipliers);
+  } else if (symmetric) {
+    u_ = solve::solve_symmetric(K, f, solver_report_);
+  } else {
+    u_ = solve::solve_general(K, f, solver_report_);
+  }
+  record_solver_report();
+  timings_["solve_total_s"] = seconds_since(start);
+  if (sink) sink->progress(0.9, "solved (" + solver_report_.method + ")");
+}
+
+void EfgAnalysis::galerkin_energies() {
+  const auto& options = problem_.options;
+  const bool lagrange = options.essential == EssentialMethod::lagrange;
+  const GalerkinSystem& system = *system_;
+  const solve::SparseMatrix& K = system.K;
+  const bool symmetric = system.symmetric;
+  const auto& constraint_shapes = system.constraint_shapes;
+  Eigen::MatrixXd Kc;
+  Eigen::VectorXd fc;
+  // energies: u^T K u over the whole system minus the constraint terms
+  const Eigen::VectorXd Ku = symmetric ? solve::multiply_symmetric_upper(K, u_) : Eigen::VectorXd(K * u_);
+  Real constraint_energy = 0.0;
+  reactions_.assign(constraint_points_.size(), Vec3::Zero());
+  constraint_nearest_.assign(constraint_points_.size(), 0);
+  Index row = 0;
+  for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
+    const auto& p = constraint_points_[i];
+    const auto& sv = constraint_shapes[i];
+    constraint_nearest_[i] = nearest_node(p.x);
+    const Vec3 uh = value_of(sv, u_);
+    Vec3 r = Vec3::Zero();
+    if (lagrange) {
+      for (int a = 0; a < 3; ++a)
+        if (p.constrained[static_cast<std::size_t>(a)]) r[a] = -multipliers_[row++];
+    } else if (options.essential == EssentialMethod::nitsche && p.surface) {
+      const auto& mat = materials_[static_cast<std::size_t>(p.material)];
+      const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
+      const Vec3 t = material::traction(mat.stress(material::strain_from_gradient(gradient_of(sv, u_))), p.normal);
+      for (int a = 0; a < 3; ++a)
+        if (p.constrained[static_cast<std::size_t>(a)]) r[a] = p.weight * (t[a] - beta * (uh[a] - p.value[a]));
+      nitsche_terms(sv, p, mat, beta, Kc, fc);
+      const Eigen::VectorXd ul = gather(sv, u_);
+      constraint_energy += ul.dot(Kc * ul);
+    } else {
+      const Real alpha = p.surface ? alpha_surface_ : alpha_point_;
+      for (int a = 0; a < 3; ++a)
+        if (p.constrained[static_cast<std::size_t>(a)]) r[a] = -alpha * p.weight * (uh[a] - p.value[a]);
+      for (int a = 0; a < 3; ++a)
+        if (p.constrained[static_cast<std::size_t>(a)]) constraint_energy += alpha * p.weight * uh[a] * uh[a];
+    }
+    reactions_[i] = r;
+  }
+  energy_internal_ = 0.5 * (u_.dot(Ku) - constraint_energy);
+  if (projection_) nodal_pressure_ = projection_->lambda.cwiseProduct(projection_->nodal_divergence(u_));
+  Real reaction_work = 0.0;
+  for (std::size_t i = 0; i < constraint_points_.size(); ++i) reaction_work += reactions_[i].dot(constraint_points_[i].value);
+  energy_external_ = 0.5 * (f_loads_.dot(u_) + reaction_work);
+  system_.reset();  // the system is released before the post-processing
+}
+
+}  // namespace lamina::efg
