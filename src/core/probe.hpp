@@ -17,4 +17,17 @@ struct Probe {
   bool nearest_in_set = false;  // `at` + `set`: take the nearest node of `nodes`
 };
 
+/// Index of a vector component name: x 0, y 1, z 2; -1 for any other name.
+inline int vector_component(const std::string& c) {
+  return c == "x" ? 0 : c == "y" ? 1 : c == "z" ? 2 : -1;
+}
+
+/// Index of a tensor component name in Voigt order (material::Voigt): xx yy zz xy yz zx -> 0..5; -1 otherwise.
+inline int tensor_component(const std::string& c) {
+  static const char* const names[] = {"xx", "yy", "zz", "xy", "yz", "zx"};
+  for (int k = 0; k < 6; ++k)
+    if (c == names[k]) return k;
+  return -1;
+}
+
 }  // namespace lamina

@@ -32,8 +32,6 @@ constexpr int kSurfaceSplit = 8;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-const std::map<std::string, int> kVector{{"x", 0}, {"y", 1}, {"z", 2}};
-const std::map<std::string, int> kTensor{{"xx", 0}, {"yy", 1}, {"zz", 2}, {"xy", 3}, {"yz", 4}, {"zx", 5}};
 
 std::string describe_point(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", x[0], x[1], x[2]); }
 
@@ -87,15 +85,15 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes)
   for (const auto& p : probes_) {
     const std::string where = "probes." + p.name;
     if (p.field == "displacement") {
-      if (!kVector.count(p.component) && p.component != "magnitude")
+      if (vector_component(p.component) < 0 && p.component != "magnitude")
         throw InputError(where + ".component", "x, y, z or magnitude for a displacement probe", p.component);
     } else if (p.field == "strain" || p.field == "stress") {
-      if (!kTensor.count(p.component) && !(p.field == "stress" && p.component == "von_mises"))
+      if (tensor_component(p.component) < 0 && !(p.field == "stress" && p.component == "von_mises"))
         throw InputError(where + ".component",
                          fmt::format("xx, yy, zz, xy, yz, zx{} for a {} probe", p.field == "stress" ? " or von_mises" : "", p.field),
                          p.component);
     } else if (p.field == "reaction_force") {
-      if (!kVector.count(p.component) && p.component != "magnitude")
+      if (vector_component(p.component) < 0 && p.component != "magnitude")
         throw InputError(where + ".component", "x, y, z or magnitude for a reaction_force probe", p.component);
       if (p.nodes.empty()) throw InputError(where + ".select", "a selection of nodes for a reaction_force probe", "none");
     } else if (p.field == "energy") {

@@ -14,11 +14,6 @@
 
 namespace lamina::efg {
 
-namespace {
-const std::map<std::string, int> kVector{{"x", 0}, {"y", 1}, {"z", 2}};
-const std::map<std::string, int> kTensor{{"xx", 0}, {"yy", 1}, {"zz", 2}, {"xy", 3}, {"yz", 4}, {"zx", 5}};
-}  // namespace
-
 void EfgAnalysis::postprocess() {
   const Index n = problem_.cloud.size();
   const auto values = shapes_->evaluate_all(problem_.cloud.positions, 1);
@@ -104,9 +99,9 @@ Vec3 EfgAnalysis::reaction(const IndexList& nodes) const {
 
 Real EfgAnalysis::field_probe(const Probe& p) const {
   auto component_of = [&](const Vec3& u, const material::Voigt& e, const material::Voigt& s) -> Real {
-    if (p.field == "displacement") return p.component == "magnitude" ? u.norm() : u[kVector.at(p.component)];
-    if (p.field == "strain") return e[kTensor.at(p.component)];
-    return p.component == "von_mises" ? material::von_mises(s) : s[kTensor.at(p.component)];
+    if (p.field == "displacement") return p.component == "magnitude" ? u.norm() : u[vector_component(p.component)];
+    if (p.field == "strain") return e[tensor_component(p.component)];
+    return p.component == "von_mises" ? material::von_mises(s) : s[tensor_component(p.component)];
   };
   auto at_point = [&](const Vec3& x) {
     if (p.field == "displacement") return component_of(displacement_at(x), material::Voigt::Zero(), material::Voigt::Zero());
@@ -139,7 +134,7 @@ Real EfgAnalysis::probe(const Probe& p) const {
   if (!solved_) return 0.0;
   if (p.field == "reaction_force") {
     const Vec3 r = reaction(p.nodes);
-    return p.component == "magnitude" ? r.norm() : r[kVector.at(p.component)];
+    return p.component == "magnitude" ? r.norm() : r[vector_component(p.component)];
   }
   if (p.field == "energy") {
     if (p.component == "internal" || p.component == "total") return energy_internal_;

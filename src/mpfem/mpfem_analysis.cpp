@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "core/step_stage.hpp"
 #include "mpfem/dof_assembly.hpp"
 #include "mpfem/gradient_list.hpp"
 #include "mpfem/strain_fit.hpp"
@@ -77,14 +78,7 @@ const std::array<TrianglePoint, 6>& triangle_rule() {
   return rule;
 }
 
-material::Voigt to_voigt(const Eigen::Vector3d& in_plane, Real zz) {
-  material::Voigt v = material::Voigt::Zero();
-  v << in_plane[0], in_plane[1], zz, in_plane[2], 0, 0;
-  return v;
-}
 
-const std::map<std::string, int> kVector{{"x", 0}, {"y", 1}, {"z", 2}};
-const std::map<std::string, int> kTensor{{"xx", 0}, {"yy", 1}, {"zz", 2}, {"xy", 3}, {"yz", 4}, {"zx", 5}};
 
 }  // namespace
 
@@ -148,14 +142,14 @@ MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes)
     const bool vector_field = p.field == "displacement" || p.field == "reaction_force";
     const bool tensor_field = p.field == "stress" || p.field == "strain";
     if (vector_field) {
-      if (!kVector.count(p.component) && p.component != "magnitude")
+      if (vector_component(p.component) < 0 && p.component != "magnitude")
         throw InputError("probes." + p.name, "component x, y, z or magnitude", p.component);
       if (p.field == "reaction_force" && p.nodes.empty())
         throw InputError("probes." + p.name, "a select: for reaction_force", "none");
       if (p.field == "displacement" && !p.at && p.nodes.empty())
         throw InputError("probes." + p.name, "at: [x, y, z] or a selection", "neither");
     } else if (tensor_field) {
-      if (!kTensor.count(p.component) && !(p.field == "stress" && p.component == "von_mises"))
+      if (tensor_component(p.component) < 0 && !(p.field == "stress" && p.component == "von_mises"))
         throw InputError("probes." + p.name, "component xx, yy, zz, xy, yz, zx (stress also von_mises)", p.component);
       if (!p.at && p.nodes.empty()) throw InputError("probes." + p.name, "at: [x, y, z] or a selection", "neither");
     } else if (p.field == "energy") {
@@ -414,8 +408,7 @@ Eigen::VectorXd MpfemAnalysis::load_vector() const {
   return f;
 }
 
-void MpfemAnalysis::assemble_and_solve() {
-  const auto start = Clock::now();
+void MpfemAnalysis::assemble_linear() {
   const Points2& x = problem_.layout.positions;
   const Index n = x.cols();
   const Real thickness = problem_.thickness;
@@ -455,10 +448,11 @@ void MpfemAnalysis::assemble_and_solve() {
   stiffness_.resize(static_cast<int>(2 * n), static_cast<int>(2 * n));
   stiffness_.setFromTriplets(triplets.begin(), triplets.end());
   f_ = load_vector();
-  timings_["assemble_s"] = seconds_since(start);
+}
 
+void MpfemAnalysis::solve_linear() {
+  const Index n = problem_.layout.positions.cols();
   // essential conditions: eliminate the prescribed particle dofs
-  const auto solve_start = Clock::now();
   const FreeDofs dofs = number_free_dofs(problem_.prescribed, n);
   const std::vector<char>& prescribed = dofs.prescribed;
   const std::vector<int>& free_id = dofs.free_id;
@@ -494,8 +488,10 @@ void MpfemAnalysis::assemble_and_solve() {
     if (!prescribed[static_cast<std::size_t>(i)]) reactions_[i] = 0;
   energy_internal_ = 0.5 * u_.dot(ku);
   energy_external_ = 0.5 * (f_.dot(u_) + reactions_.dot(u_));
-  timings_["solve_s"] = seconds_since(solve_start);
+}
 
+void MpfemAnalysis::particle_strains_and_stresses() {
+  const Index n = problem_.layout.positions.cols();
   // particle strains and stresses
   strain_.resize(3, n);
   stress_.resize(3, n);
@@ -617,11 +613,24 @@ void MpfemAnalysis::compute_errors() {
 
 void MpfemAnalysis::solve() { solve_with(nullptr); }
 
+std::vector<StepStage> MpfemAnalysis::stages(OutputSink* sink) {
+  std::vector<StepStage> list;
+  if (problem_.options.analysis == MpfemAnalysisKind::large_deformation)
+    list.push_back({"large_deformation", [this, sink] { solve_large_deformation(sink); }});
+  else
+    list.insert(list.end(), {{"assemble", [this] { assemble_linear(); }},
+                             {"solve", [this] { solve_linear(); }},
+                             {"strains", [this] { particle_strains_and_stresses(); }}});
+  list.push_back({"errors", [this] { compute_errors(); }});
+  return list;
+}
+
 void MpfemAnalysis::solve_with(OutputSink* sink) {
   const auto start = Clock::now();
-  if (problem_.options.analysis == MpfemAnalysisKind::large_deformation) solve_large_deformation(sink);
-  else assemble_and_solve();
-  compute_errors();
+  const std::vector<StepStage> list = stages(sink);
+  std::vector<Real> seconds(list.size(), 0.0);
+  run_stages(list, seconds);
+  for (std::size_t k = 0; k < list.size(); ++k) timings_[std::string(list[k].name) + "_s"] = seconds[k];
   solved_ = true;
   timings_["total_s"] = seconds_since(start) + timings_["setup_s"];
 }
@@ -634,144 +643,5 @@ void MpfemAnalysis::run(OutputSink& sink) {
 }
 
 Real MpfemAnalysis::total_volume() const { return problem_.thickness * discretization_.area_weight.sum(); }
-
-Index MpfemAnalysis::nearest_particle(const Vec2& x) const {
-  Index best = 0;
-  Real distance = INFINITY;
-  for (Index p = 0; p < problem_.layout.positions.cols(); ++p) {
-    const Real d = (problem_.layout.positions.col(p) - x).squaredNorm();
-    if (d < distance) distance = d, best = p;
-  }
-  return best;
-}
-
-Vec2 MpfemAnalysis::displacement_at(const Vec2& x) const {
-  const auto values = shape_functions_at(discretization_, problem_.layout.positions, x);
-  if (values.empty()) return u_.segment<2>(2 * nearest_particle(x));
-  Vec2 u = Vec2::Zero();
-  for (const auto& v : values) u += v.value * u_.segment<2>(2 * v.particle);
-  return u;
-}
-
-Vec2 MpfemAnalysis::reaction(const IndexList& particles) const {
-  Vec2 r = Vec2::Zero();
-  for (Index p : particles) r += reactions_.segment<2>(2 * p);
-  return r;
-}
-
-Real MpfemAnalysis::field_probe(const Probe& p) const {
-  auto vector_component = [&](const Vec2& v) {
-    if (p.component == "magnitude") return v.norm();
-    const int c = kVector.at(p.component);
-    return c < 2 ? v[c] : 0.0;
-  };
-  auto tensor_component = [&](Index particle) {
-    const PlaneMaterial& m = materials_[static_cast<std::size_t>(problem_.material_of_particle[static_cast<std::size_t>(particle)])];
-    const bool stress = p.field == "stress";
-    material::Voigt v;
-    if (stress) v = to_voigt(stress_.col(particle), m.plane == PlaneKind::strain ? out_of_plane_[particle] : 0.0);
-    else v = to_voigt(strain_.col(particle), m.plane == PlaneKind::stress ? out_of_plane_[particle] : 0.0);
-    if (p.component == "von_mises") return material::von_mises(v);
-    return v[kTensor.at(p.component)];
-  };
-  if (p.field == "reaction_force") {
-    const Vec2 r = reaction(p.nodes);
-    return vector_component(r);
-  }
-  auto value_at_particle = [&](Index q) {
-    return p.field == "displacement" ? vector_component(u_.segment<2>(2 * q)) : tensor_component(q);
-  };
-  if (p.at) {
-    const Vec2 x(p.at->x(), p.at->y());
-    if (p.nearest_in_set && !p.nodes.empty()) {
-      Index best = p.nodes.front();
-      for (Index q : p.nodes)
-        if ((problem_.layout.positions.col(q) - x).squaredNorm() < (problem_.layout.positions.col(best) - x).squaredNorm()) best = q;
-      return value_at_particle(best);
-    }
-    if (p.field == "displacement") return vector_component(displacement_at(x));
-    return value_at_particle(nearest_particle(x));
-  }
-  Real best = 0;
-  for (Index q : p.nodes) {
-    const Real v = value_at_particle(q);
-    if (std::abs(v) > std::abs(best)) best = v;
-  }
-  return best;
-}
-
-Real MpfemAnalysis::probe(const Probe& requested) const {
-  if (!solved_) return NAN;
-  // the application may hold the probes resolved on the case's original particles; the ones given
-  // to the constructor are resolved on this analysis' particles (refine / hole regenerate them)
-  const Probe* own = &requested;
-  for (const auto& q : probes_)
-    if (q.name == requested.name) own = &q;
-  const Probe& p = *own;
-  if (p.field == "energy") {
-    if (p.component == "kinetic") return 0.0;
-    if (p.component == "external") return energy_external_;
-    return energy_internal_;
-  }
-  return field_probe(p);
-}
-
-std::map<std::string, Real> MpfemAnalysis::builtin_probes() const {
-  std::map<std::string, Real> result;
-  result["h"] = discretization_.typical_spacing;
-  if (problem_.options.analysis == MpfemAnalysisKind::large_deformation) {
-    result["neighbourhood_rebuilds"] = static_cast<Real>(stats_.rebuilds);
-    result["rebuilt_particles"] = static_cast<Real>(stats_.rebuilt_particles);
-    result["newton_iterations"] = static_cast<Real>(stats_.newton_iterations);
-    result["load_increments"] = static_cast<Real>(stats_.increments);
-    result["increment_cuts"] = static_cast<Real>(stats_.cuts);
-  }
-  if (problem_.options.exact_displacement) {
-    result["err_displacement"] = errors_.max_displacement;
-    result["err_stress"] = errors_.max_stress;
-    result["err_l2"] = errors_.l2;
-    result["err_energy"] = errors_.energy;
-    result["err_energy_particles"] = errors_.energy_particles;
-  }
-  return result;
-}
-
-OutputFrame MpfemAnalysis::frame() const {
-  const Points2& x = problem_.layout.positions;
-  const Index n = x.cols();
-  OutputFrame f;
-  f.points.resize(3, n);
-  f.points.topRows(2) = x;
-  f.points.row(2).setConstant(problem_.z_mid);
-  PointField displacement{"displacement", 3, std::vector<Real>(static_cast<std::size_t>(3 * n), 0.0)};
-  PointField strain{"strain", 6, std::vector<Real>(static_cast<std::size_t>(6 * n), 0.0)};
-  PointField stress{"stress", 6, std::vector<Real>(static_cast<std::size_t>(6 * n), 0.0)};
-  PointField mises{"von_mises", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
-  PointField volume{"particle_volume", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
-  PointField material_id{"material_id", 1, std::vector<Real>(static_cast<std::size_t>(n), 0.0)};
-  for (Index p = 0; p < n; ++p) {
-    const auto s = static_cast<std::size_t>(p);
-    volume.values[s] = problem_.thickness * discretization_.area_weight[p];
-    material_id.values[s] = problem_.material_of_particle[s];
-    if (!solved_) continue;
-    displacement.values[3 * s] = u_[2 * p];
-    displacement.values[3 * s + 1] = u_[2 * p + 1];
-    const PlaneMaterial& m = materials_[static_cast<std::size_t>(problem_.material_of_particle[s])];
-    const material::Voigt e = to_voigt(strain_.col(p), m.plane == PlaneKind::stress ? out_of_plane_[p] : 0.0);
-    const material::Voigt sg = to_voigt(stress_.col(p), m.plane == PlaneKind::strain ? out_of_plane_[p] : 0.0);
-    for (int c = 0; c < 6; ++c) strain.values[6 * s + c] = e[c], stress.values[6 * s + c] = sg[c];
-    mises.values[s] = material::von_mises(sg);
-  }
-  f.point_fields = {displacement, strain, stress, mises, volume, material_id};
-  return f;
-}
-
-RunCounts MpfemAnalysis::counts() const {
-  RunCounts c;
-  c.nodes = problem_.layout.positions.cols();
-  c.dofs = 2 * c.nodes;
-  c.steps = problem_.options.analysis == MpfemAnalysisKind::large_deformation ? std::max<Index>(1, stats_.increments) : 1;
-  return c;
-}
 
 }  // namespace lamina::mpfem

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "core/analysis.hpp"
+#include "core/step_stage.hpp"
 #include "material/hyperelastic.hpp"
 #include "mpfem/energy_points.hpp"
 #include "mpfem/mpfem_problem.hpp"
@@ -97,7 +98,13 @@ class MpfemAnalysis : public Analysis {
   const Errors& errors() const { return errors_; }
 
  private:
-  void assemble_and_solve();
+  /// The ordered stages of the analysis (core/step_stage.hpp): linear: assemble, solve (essential
+  /// conditions eliminated; reactions, energies), strains (particle strains and stresses); large
+  /// deformation: the Newton increments (mpfem_large_deformation.cpp); then errors. Timed <name>_s.
+  std::vector<StepStage> stages(OutputSink* sink);
+  void assemble_linear();
+  void solve_linear();
+  void particle_strains_and_stresses();
   void solve_with(OutputSink* sink);
   void solve_large_deformation(OutputSink* sink);  // mpfem_large_deformation.cpp
   /// Particles whose neighbours chosen on the current positions differ from their element's.
