@@ -286,8 +286,8 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
       std::optional<geometry::Expression> expression;
       if (value && !value->is_constant()) expression.emplace(value->expression);
       for (Index q : model->boundary_nodes[i]) {
-        mpfem::PrescribedDof d;
-        d.particle = q;
+        PrescribedDof d;
+        d.node = q;
         d.component = a;
         if (value) d.value = expression ? expression->evaluate(model->cloud.point(q), 1.0) : value->constant;
         if (!std::isfinite(d.value)) {

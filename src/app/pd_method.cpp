@@ -236,7 +236,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   };
   // Boundary conditions (a later condition on the same dof replaces an earlier one).
   std::map<Index, std::size_t> seen;
-  auto prescribe = [&](const pd::PrescribedDof& d) {
+  auto prescribe = [&](const PrescribedDof& d) {
     const Index key = 3 * d.node + d.component;
     auto it = seen.find(key);
     if (it == seen.end()) {
@@ -259,7 +259,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
       if (!b.fixed[A] && !b.displacement[A] && !b.velocity[A]) continue;
       any = true;
       for (Index i : model.boundary_nodes[k]) {
-        pd::PrescribedDof d;
+        PrescribedDof d;
         d.node = i;
         d.component = a;
         d.ramp = ramp;

@@ -31,8 +31,8 @@ inline FreeDofs number_free_dofs(const std::vector<PrescribedDof>& conditions, I
   dofs.prescribed.assign(size, 0);
   dofs.values = Eigen::VectorXd::Zero(2 * particles);
   for (const auto& d : conditions) {
-    dofs.prescribed[static_cast<std::size_t>(2 * d.particle + d.component)] = 1;
-    dofs.values[2 * d.particle + d.component] = d.value;
+    dofs.prescribed[static_cast<std::size_t>(2 * d.node + d.component)] = 1;
+    dofs.values[2 * d.node + d.component] = d.value;
   }
   dofs.free_id.assign(size, -1);
   for (std::size_t i = 0; i < size; ++i)

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/prescribed_dof.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
 #include "material/linear_elastic.hpp"
@@ -66,12 +67,6 @@ struct PlaneMaterial {
   Eigen::Matrix3d matrix() const;
   /// eps_zz (plane stress) or sigma_zz (plane strain) from the in-plane strain.
   Real out_of_plane(const Eigen::Vector3d& strain) const;
-};
-
-struct PrescribedDof {
-  Index particle = 0;
-  int component = 0;  // 0 = x, 1 = y
-  Real value = 0;
 };
 
 struct MpfemLoad {

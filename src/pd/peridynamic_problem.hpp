@@ -5,19 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "core/prescribed_dof.hpp"
 #include "core/ramp.hpp"
 #include "pd/peridynamic_body.hpp"
 
 namespace lamina::pd {
-
-/// Prescribed displacement (or, for explicit runs, velocity) of one degree of freedom.
-struct PrescribedDof {
-  Index node = 0;
-  int component = 0;
-  Real value = 0.0;           // at ramp factor 1
-  int ramp = -1;              // index into PeridynamicProblem::ramps (-1: linear in the load factor / constant)
-  bool velocity = false;      // explicit: prescribed velocity instead of displacement
-};
 
 /// A nodal force (N) at ramp factor 1.
 struct NodalForce {
