@@ -30,14 +30,6 @@ std::optional<std::array<int, 3>> read_counts(const io::NodeReader& node, int lo
   return counts;
 }
 
-efg::Region make_region(const io::Selection& s, const IndexList& nodes, const std::string& label) {
-  efg::Region r;
-  r.spec = s.spec;
-  r.nodes = nodes;
-  r.label = label;
-  return r;
-}
-
 std::unique_ptr<MethodOptions> read_efg(const io::Case&, const io::NodeReader& section) {
   auto result = std::make_unique<EfgMethodOptions>();
   result->options = read_efg_options(section);
@@ -167,48 +159,33 @@ efg::EfgProblem make_efg_problem(const io::Case& c, const Model& model, const ef
     efg::EfgMaterial em;
     em.name = m.spec.name;
     em.elastic = material::LinearElastic{m.spec.E, m.spec.nu};
-    if (m.select) em.region = make_region(*m.select, model.material_nodes[i], fmt::format("materials.{}.select", i));
+    if (m.select) {
+      em.region = *m.select;
+      em.region->nodes = model.material_nodes[i];
+      em.region->label = fmt::format("materials.{}.select", i);
+    }
     p.materials.push_back(em);
   }
-  for (std::size_t i = 0; i < c.boundary.size(); ++i) {
-    const auto& b = c.boundary[i];
+  for (const auto& b : model.constraints) {
     if (b.velocity[0] || b.velocity[1] || b.velocity[2]) {
       problem_at(b.location, ".velocity", "fix, symmetry or displacement (velocity is for explicit methods)", "velocity");
       continue;
     }
-    efg::EssentialCondition e;
-    e.region = make_region(b.select, model.boundary_nodes[i], fmt::format("boundary.{}", i));
-    for (int a = 0; a < 3; ++a) {
-      if (b.fixed[static_cast<std::size_t>(a)]) e.constrained[static_cast<std::size_t>(a)] = true;
-      if (b.displacement[static_cast<std::size_t>(a)]) {
-        e.constrained[static_cast<std::size_t>(a)] = true;
-        e.value[static_cast<std::size_t>(a)] = *b.displacement[static_cast<std::size_t>(a)];
-      }
-    }
-    if (!e.constrained[0] && !e.constrained[1] && !e.constrained[2]) {
+    if (!b.constrains(0) && !b.constrains(1) && !b.constrains(2)) {
       problem_at(b.location, ".fix", "translations x, y or z (a 3D continuum has no rotational degrees of freedom)",
                  "only rotations");
       continue;
     }
-    p.constraints.push_back(e);
+    p.constraints.push_back(b);
   }
-  for (std::size_t i = 0; i < c.loads.size(); ++i) {
-    const auto& l = c.loads[i];
-    efg::EfgLoad load;
-    load.region = make_region(l.select, model.load_nodes[i], fmt::format("loads.{}", i));
-    load.vector = l.vector;
-    load.scalar = l.scalar;
-    switch (l.kind) {
-      case io::Load::Kind::force: load.kind = efg::EfgLoad::Kind::force; break;
-      case io::Load::Kind::traction: load.kind = efg::EfgLoad::Kind::traction; break;
-      case io::Load::Kind::pressure: load.kind = efg::EfgLoad::Kind::pressure; break;
-      case io::Load::Kind::body_force: load.kind = efg::EfgLoad::Kind::body_force; break;
-      default:
-        problem_at(l.location, "", "force, traction, pressure or body_force (efg is a static analysis)",
-                   "mass or initial_velocity");
-        continue;
+  for (const auto& l : model.loads) {
+    using Kind = model::Load::Kind;
+    if (l.kind != Kind::force && l.kind != Kind::traction && l.kind != Kind::pressure && l.kind != Kind::body_force) {
+      problem_at(l.location, "", "force, traction, pressure or body_force (efg is a static analysis)",
+                 "mass or initial_velocity");
+      continue;
     }
-    p.loads.push_back(load);
+    p.loads.push_back(l);
   }
   if (!problems.empty()) throw InputError(problems);
   return p;

@@ -192,8 +192,18 @@ void resolve_selections(const io::Case& c, Model& model) {
       return {};
     }
   };
-  for (const auto& bc : c.boundary) model.boundary_nodes.push_back(resolve(bc.select));
-  for (const auto& load : c.loads) model.load_nodes.push_back(resolve(load.select));
+  model.constraints = c.boundary;
+  for (std::size_t i = 0; i < model.constraints.size(); ++i) {
+    auto& select = model.constraints[i].select;
+    select.nodes = resolve(select);
+    select.label = fmt::format("boundary.{}", i);
+  }
+  model.loads = c.loads;
+  for (std::size_t i = 0; i < model.loads.size(); ++i) {
+    auto& select = model.loads[i].select;
+    select.nodes = resolve(select);
+    select.label = fmt::format("loads.{}", i);
+  }
   for (const auto& m : c.materials) {
     if (m.select) model.material_nodes.push_back(resolve(*m.select));
     else {

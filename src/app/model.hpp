@@ -18,8 +18,8 @@ struct Model {
   PointCloud cloud;
   std::optional<ShellMesh> shell;         // shell methods (mpm): the mid-surface mesh; cloud = its nodes
   std::vector<std::array<Index, 3>> triangles;  // geometry mesh: its triangles' corners (cloud indices)
-  std::vector<IndexList> boundary_nodes;  // per case.boundary entry
-  std::vector<IndexList> load_nodes;      // per case.loads entry
+  std::vector<model::Constraint> constraints;  // case.boundary with their nodes resolved (select.nodes, select.label)
+  std::vector<model::Load> loads;             // case.loads with their nodes resolved
   std::vector<IndexList> material_nodes;  // per case.materials entry (all nodes when unassigned)
   std::vector<Probe> probes;              // resolved probes, in case order
 };

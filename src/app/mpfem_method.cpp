@@ -271,8 +271,7 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
       }
 
   // essential conditions on particle dofs
-  for (std::size_t i = 0; i < c.boundary.size(); ++i) {
-    const auto& b = c.boundary[i];
+  for (const auto& b : model->constraints) {
     if (b.velocity[0] || b.velocity[1] || b.velocity[2]) {
       problems.push_back(at(b.location, ".velocity", "fix, symmetry or displacement (velocity is for explicit methods)", "velocity"));
       continue;
@@ -285,7 +284,7 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
       any = true;
       std::optional<geometry::Expression> expression;
       if (value && !value->is_constant()) expression.emplace(value->expression);
-      for (Index q : model->boundary_nodes[i]) {
+      for (Index q : b.select.nodes) {
         PrescribedDof d;
         d.node = q;
         d.component = a;
@@ -303,29 +302,19 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
   }
 
   // loads
-  for (std::size_t i = 0; i < c.loads.size(); ++i) {
-    const auto& l = c.loads[i];
-    mpfem::MpfemLoad load;
-    load.particles = model->load_nodes[i];
-    load.vector = {l.vector[0], l.vector[1]};
-    load.scalar = l.scalar;
-    load.label = fmt::format("loads.{}", i);
-    switch (l.kind) {
-      case io::Load::Kind::force: load.kind = mpfem::MpfemLoad::Kind::force; break;
-      case io::Load::Kind::traction: load.kind = mpfem::MpfemLoad::Kind::traction; break;
-      case io::Load::Kind::pressure: load.kind = mpfem::MpfemLoad::Kind::pressure; break;
-      case io::Load::Kind::body_force: load.kind = mpfem::MpfemLoad::Kind::body_force; break;
-      default:
-        problems.push_back(at(l.location, "", "force, traction, pressure or body_force (mpfem is a static analysis)",
-                              "mass or initial_velocity"));
-        continue;
+  for (const auto& l : model->loads) {
+    using Kind = model::Load::Kind;
+    if (l.kind != Kind::force && l.kind != Kind::traction && l.kind != Kind::pressure && l.kind != Kind::body_force) {
+      problems.push_back(at(l.location, "", "force, traction, pressure or body_force (mpfem is a static analysis)",
+                            "mass or initial_velocity"));
+      continue;
     }
-    if (load.kind != mpfem::MpfemLoad::Kind::pressure && !(l.vector[2].is_constant() && l.vector[2].constant == 0.0)) {
+    if (l.kind != Kind::pressure && !(l.vector[2].is_constant() && l.vector[2].constant == 0.0)) {
       problems.push_back(at(l.location, ".2", "a zero z component (mpfem is 2D in x-y)",
                             l.vector[2].is_constant() ? fmt::format("{}", l.vector[2].constant) : l.vector[2].expression));
       continue;
     }
-    p.loads.push_back(load);
+    p.loads.push_back(l);
   }
   if (!problems.empty()) throw InputError(problems);
   // the particle set's problems (coincident or isolated particles, cells) at the key the case names it with

@@ -11,18 +11,10 @@ namespace lamina::app {
 
 namespace {
 
-struct MomentEntry {
-  io::Selection select;
-  std::array<geometry::ScalarField, 3> moment;
-  bool per_edge_length = false;  // edge_moment: moment per unit length of the selected free edges
-  Ramp ramp;
-  io::SourceLocation location;
-};
-
 struct MpmMethodOptions : MethodOptions {
   mpm::MpmOptions options;
   shell::ShellSection section;
-  std::vector<MomentEntry> moments;
+  std::vector<model::Load> moments;  // mpm.moments: kind moment / edge_moment
   ModelRequest model_request() const override { return ModelRequest{true, false}; }  // the shell mesh
 };
 
@@ -109,16 +101,17 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
     if (moments.defined() && moments.expect_sequence()) {
       for (const auto& m : moments.elements()) {
         if (!m.expect_map()) continue;
-        MomentEntry entry;
+        model::Load entry;
         entry.location = io::location_of(m);
         if (auto s = io::read_selection(m.required("select"))) entry.select = *s;
-        entry.per_edge_length = m.has("edge_moment");
-        if (entry.per_edge_length && m.has("moment")) m.child("edge_moment").error("either moment (total) or edge_moment (per unit length), not both");
-        io::NodeReader vector = entry.per_edge_length ? m.child("edge_moment") : m.required("moment");
+        const bool per_edge_length = m.has("edge_moment");
+        entry.kind = per_edge_length ? model::Load::Kind::edge_moment : model::Load::Kind::moment;
+        if (per_edge_length && m.has("moment")) m.child("edge_moment").error("either moment (total) or edge_moment (per unit length), not both");
+        io::NodeReader vector = per_edge_length ? m.child("edge_moment") : m.required("moment");
         if (vector.defined()) {
           if (vector.is_sequence() && vector.node().size() == 3) {
             const auto items = vector.elements();
-            for (std::size_t a = 0; a < 3; ++a) entry.moment[a] = io::read_scalar_field(items[a]);
+            for (std::size_t a = 0; a < 3; ++a) entry.vector[a] = io::read_scalar_field(items[a]);
           } else {
             vector.error("three components [mx, my, mz]");
           }
@@ -166,60 +159,38 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
     p.poisson = m.nu;
     p.density = m.density.value_or(0.0);
   }
-  for (std::size_t i = 0; i < c.boundary.size(); ++i) {
-    const auto& b = c.boundary[i];
-    mpm::NodalConstraint k;
-    k.nodes = model.boundary_nodes[i];
-    k.fixed = b.fixed;
-    k.velocity = b.velocity;
+  for (const auto& b : model.constraints) {
+    model::Constraint k = b;
     k.ramp = scaled_ramp(b.ramp, ramp_scale);
-    k.label = fmt::format("boundary.{}", i);
     bool displacement = false;
-    for (int a = 0; a < 3; ++a) {
-      if (!b.displacement[static_cast<std::size_t>(a)]) continue;
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (!b.displacement[a]) continue;
       // a zero prescribed displacement is a fixed component; other values are not supported yet
-      const auto& d = *b.displacement[static_cast<std::size_t>(a)];
-      if (d.is_constant() && d.constant == 0.0) k.fixed[static_cast<std::size_t>(a)] = true;
+      const auto& d = *b.displacement[a];
+      if (d.is_constant() && d.constant == 0.0) k.fixed[a] = true;
       else displacement = true;
+      k.displacement[a].reset();
     }
     if (displacement)
       problem_at(b.location, ".displacement", "fix or velocity (non-zero prescribed displacements are not in mpm yet)", "displacement");
     p.constraints.push_back(k);
   }
-  for (std::size_t i = 0; i < c.loads.size(); ++i) {
-    const auto& l = c.loads[i];
-    mpm::NodalLoad load;
-    load.nodes = model.load_nodes[i];
-    load.vector = l.vector;
-    load.scalar = l.scalar;
+  for (const auto& l : model.loads) {
+    if (l.kind == model::Load::Kind::mass && (!l.scalar.is_constant() || !(l.scalar.constant > 0)))
+      problem_at(l.location, ".mass", "a positive constant mass", "an expression or <= 0");
+    model::Load load = l;
     load.ramp = scaled_ramp(l.ramp, ramp_scale);
-    load.label = fmt::format("loads.{}", i);
-    switch (l.kind) {
-      case io::Load::Kind::force: load.kind = mpm::NodalLoad::Kind::force; break;
-      case io::Load::Kind::traction: load.kind = mpm::NodalLoad::Kind::traction; break;
-      case io::Load::Kind::pressure: load.kind = mpm::NodalLoad::Kind::pressure; break;
-      case io::Load::Kind::body_force: load.kind = mpm::NodalLoad::Kind::body_force; break;
-      case io::Load::Kind::mass:
-        load.kind = mpm::NodalLoad::Kind::mass;
-        if (!l.scalar.is_constant() || !(l.scalar.constant > 0)) problem_at(l.location, ".mass", "a positive constant mass", "an expression or <= 0");
-        break;
-      case io::Load::Kind::initial_velocity: load.kind = mpm::NodalLoad::Kind::initial_velocity; break;
-    }
     p.loads.push_back(load);
   }
   for (std::size_t i = 0; i < mo.moments.size(); ++i) {
-    const auto& m = mo.moments[i];
-    mpm::NodalLoad load;
-    load.kind = m.per_edge_length ? mpm::NodalLoad::Kind::edge_moment : mpm::NodalLoad::Kind::moment;
+    model::Load load = mo.moments[i];
     try {
-      load.nodes = resolve_or_throw(m.select, model.cloud);
+      load.select.nodes = resolve_or_throw(load.select, model.cloud);
     } catch (const InputError& e) {
       problems.insert(problems.end(), e.diagnostics().begin(), e.diagnostics().end());
       continue;
     }
-    load.vector = m.moment;
-    load.ramp = m.ramp;
-    load.label = fmt::format("mpm.moments.{}", i);
+    load.select.label = fmt::format("mpm.moments.{}", i);
     p.loads.push_back(load);
   }
   if (!problems.empty()) throw InputError(problems);

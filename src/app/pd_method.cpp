@@ -246,8 +246,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
       p.prescribed[it->second] = d;
     }
   };
-  for (std::size_t k = 0; k < c.boundary.size(); ++k) {
-    const auto& b = c.boundary[k];
+  for (const auto& b : model.constraints) {
     const int ramp = ramp_index(b.ramp);
     bool any = false;
     for (int a = 0; a < 3; ++a) {
@@ -258,7 +257,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
       }
       if (!b.fixed[A] && !b.displacement[A] && !b.velocity[A]) continue;
       any = true;
-      for (Index i : model.boundary_nodes[k]) {
+      for (Index i : b.select.nodes) {
         PrescribedDof d;
         d.node = i;
         d.component = a;
@@ -285,27 +284,26 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
       problem_at(b.location, ".fix", "translations x, y or z (peridynamic nodes have no rotations)", "only rotations");
   }
   // Loads.
-  for (std::size_t k = 0; k < c.loads.size(); ++k) {
-    const auto& l = c.loads[k];
-    const auto& nodes = model.load_nodes[k];
+  for (const auto& l : model.loads) {
+    const auto& nodes = l.select.nodes;
     const int ramp = ramp_index(l.ramp);
     try {
       switch (l.kind) {
-        case io::Load::Kind::force:
+        case model::Load::Kind::force:
           for (Index i : nodes) {
             Vec3 f;
             for (int a = 0; a < 3; ++a) f[a] = evaluate(l.vector[static_cast<std::size_t>(a)], p.positions.col(i));
             p.forces.push_back(pd::NodalForce{i, f / static_cast<Real>(nodes.size()), ramp});
           }
           break;
-        case io::Load::Kind::body_force:
+        case model::Load::Kind::body_force:
           for (Index i : nodes) {
             Vec3 f;
             for (int a = 0; a < 3; ++a) f[a] = evaluate(l.vector[static_cast<std::size_t>(a)], p.positions.col(i));
             p.forces.push_back(pd::NodalForce{i, f * p.volumes[i], ramp});
           }
           break;
-        case io::Load::Kind::initial_velocity:
+        case model::Load::Kind::initial_velocity:
           if (p.initial_velocity.cols() != n) p.initial_velocity = PointMatrix::Zero(3, n);
           for (Index i : nodes)
             for (int a = 0; a < 3; ++a)

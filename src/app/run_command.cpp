@@ -401,9 +401,9 @@ int check_case(const std::string& path, const std::vector<std::string>& override
   std::cout << fmt::format("# method {}, {} nodes, {} boundary conditions, {} loads, {} probes\n", c.method,
                            model.cloud.size(), c.boundary.size(), c.loads.size(), c.probes.size());
   for (std::size_t i = 0; i < c.boundary.size(); ++i)
-    std::cout << fmt::format("# boundary.{}: {} -> {} nodes\n", i, c.boundary[i].select.spec.describe(), model.boundary_nodes[i].size());
+    std::cout << fmt::format("# boundary.{}: {} -> {} nodes\n", i, c.boundary[i].select.spec.describe(), model.constraints[i].select.nodes.size());
   for (std::size_t i = 0; i < c.loads.size(); ++i)
-    std::cout << fmt::format("# loads.{}: {} -> {} nodes\n", i, c.loads[i].select.spec.describe(), model.load_nodes[i].size());
+    std::cout << fmt::format("# loads.{}: {} -> {} nodes\n", i, c.loads[i].select.spec.describe(), model.loads[i].select.nodes.size());
   std::cout << resolved_yaml(c) << "\n";
   return 0;
 }

@@ -261,18 +261,18 @@ void EfgAnalysis::build_constraints() {
   const Real tolerance = 1e-9 * (upper - lower).norm();
   for (std::size_t e = 0; e < problem_.constraints.size(); ++e) {
     const auto& c = problem_.constraints[e];
-    if (!c.constrained[0] && !c.constrained[1] && !c.constrained[2]) continue;
+    if (!c.constrains(0) && !c.constrains(1) && !c.constrains(2)) continue;
     std::array<std::unique_ptr<FieldEvaluator>, 3> value;
-    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(c.value[static_cast<std::size_t>(a)]);
+    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(c.displacement_of(a));
     auto prescribed = [&](const Vec3& x) {
       Vec3 v = Vec3::Zero();
       for (int a = 0; a < 3; ++a)
-        if (c.constrained[static_cast<std::size_t>(a)]) v[a] = (*value[static_cast<std::size_t>(a)])(x);
+        if (c.constrains(a)) v[a] = (*value[static_cast<std::size_t>(a)])(x);
       return v;
     };
     bool any_surface = false;
     if (surface_methods) {
-      RegionTest test(c.region, &cells_->map, [this](const Vec3& x) { return nearest_node(x); }, tolerance);
+      RegionTest test(c.select, &cells_->map, [this](const Vec3& x) { return nearest_node(x); }, tolerance);
       if (test.can_select_surface()) {
         const SurfaceQuadrature part = refine_selected_faces(
             *cells_, surface_, problem_.options.gauss, kSurfaceSplit,
@@ -287,7 +287,7 @@ void EfgAnalysis::build_constraints() {
           p.material = std::max(material_at(x), 0);
           p.surface = true;
           p.condition = static_cast<int>(e);
-          p.constrained = c.constrained;
+          p.constrained = c.held();
           p.value = prescribed(x);
           constraint_points_.push_back(p);
           any_surface = true;
@@ -295,14 +295,14 @@ void EfgAnalysis::build_constraints() {
       }
     }
     if (!any_surface) {
-      for (Index node : c.region.nodes) {
+      for (Index node : c.select.nodes) {
         ConstraintPoint p;
         p.x = problem_.cloud.positions.col(node);
         p.weight = 1.0;
         p.material = std::max(material_at(p.x), 0);
         p.surface = false;
         p.condition = static_cast<int>(e);
-        p.constrained = c.constrained;
+        p.constrained = c.held();
         p.value = prescribed(p.x);
         constraint_points_.push_back(p);
       }
@@ -322,25 +322,25 @@ void EfgAnalysis::build_loads() {
     auto vector_at = [&](const Vec3& x) {
       return Vec3((*vec[0])(x), (*vec[1])(x), (*vec[2])(x));
     };
-    RegionTest test(load.region, &cells_->map, [this](const Vec3& x) { return nearest_node(x); }, tolerance);
+    RegionTest test(load.select, &cells_->map, [this](const Vec3& x) { return nearest_node(x); }, tolerance);
     switch (load.kind) {
-      case EfgLoad::Kind::force: {
+      case model::Load::Kind::force: {
         if (problem_.options.formulation != Formulation::galerkin)
-          throw InputError(load.region.label,
+          throw InputError(load.select.label,
                            fmt::format("traction, pressure or body_force with formulation: {} (the strong form has no "
                                        "point forces: spread the force as a traction over a face, or use formulation: "
                                        "galerkin)",
                                        to_string(problem_.options.formulation)),
                            "force");
-        const Real share = 1.0 / static_cast<Real>(load.region.nodes.size());
-        for (Index node : load.region.nodes) {
+        const Real share = 1.0 / static_cast<Real>(load.select.nodes.size());
+        for (Index node : load.select.nodes) {
           const Vec3 x = problem_.cloud.positions.col(node);
           point_loads_.push_back({x, share * vector_at(x)});
         }
         break;
       }
-      case EfgLoad::Kind::traction:
-      case EfgLoad::Kind::pressure: {
+      case model::Load::Kind::traction:
+      case model::Load::Kind::pressure: {
         FieldEvaluator pressure(load.scalar);
         bool any = false;
         if (test.can_select_surface()) {
@@ -349,19 +349,19 @@ void EfgAnalysis::build_loads() {
               [&](const Vec3& x, int face) { return test.on_surface(x, face); });
           for (Index s = 0; s < part.size(); ++s) {
             const Vec3 x = part.points.col(s);
-            const Vec3 t = load.kind == EfgLoad::Kind::traction ? vector_at(x) : Vec3(-pressure(x) * part.normals.col(s));
+            const Vec3 t = load.kind == model::Load::Kind::traction ? vector_at(x) : Vec3(-pressure(x) * part.normals.col(s));
             point_loads_.push_back({x, part.weights[s] * t});
             any = true;
           }
         }
         if (!any)
-          throw InputError(load.region.label,
+          throw InputError(load.select.label,
                            "a selection that holds on part of the body's boundary surface (traction and pressure are "
                            "integrated over the boundary faces where the selection holds)",
-                           load.region.spec.describe() + " holds at no boundary quadrature point");
+                           load.select.spec.describe() + " holds at no boundary quadrature point");
         break;
       }
-      case EfgLoad::Kind::body_force: {
+      case model::Load::Kind::body_force: {
         if (body_force_.cols() != volume_.size()) body_force_ = Eigen::Matrix3Xd::Zero(3, volume_.size());
         for (Index q = 0; q < volume_.size(); ++q) {
           const Vec3 x = volume_.points.col(q);

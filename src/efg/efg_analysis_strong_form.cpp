@@ -90,11 +90,11 @@ std::vector<StrongFormPoint> EfgAnalysis::strong_form_nodes() const {
   // essential conditions at their selected nodes (a later condition overrides an earlier one per component)
   for (const auto& c : problem_.constraints) {
     std::array<std::unique_ptr<FieldEvaluator>, 3> value;
-    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(c.value[static_cast<std::size_t>(a)]);
-    for (Index node : c.region.nodes) {
+    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(c.displacement_of(a));
+    for (Index node : c.select.nodes) {
       StrongFormPoint& p = points[static_cast<std::size_t>(node)];
       for (int a = 0; a < 3; ++a)
-        if (c.constrained[static_cast<std::size_t>(a)]) {
+        if (c.constrains(a)) {
           p.constrained[static_cast<std::size_t>(a)] = true;
           p.value[a] = (*value[static_cast<std::size_t>(a)])(p.x);
         }
@@ -103,14 +103,14 @@ std::vector<StrongFormPoint> EfgAnalysis::strong_form_nodes() const {
 
   // tractions on the faces of boundary nodes, body forces at all nodes
   for (const auto& load : problem_.loads) {
-    RegionTest test(load.region, &map, nearest, tolerance);
+    RegionTest test(load.select, &map, nearest, tolerance);
     std::array<std::unique_ptr<FieldEvaluator>, 3> vec;
     for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(load.vector[static_cast<std::size_t>(a)]);
     FieldEvaluator pressure(load.scalar);
     bool any = false;
     for (Index i = 0; i < n; ++i) {
       StrongFormPoint& p = points[static_cast<std::size_t>(i)];
-      if (load.kind == EfgLoad::Kind::body_force) {
+      if (load.kind == model::Load::Kind::body_force) {
         if (test.in_volume(p.x)) p.body_force += Vec3((*vec[0])(p.x), (*vec[1])(p.x), (*vec[2])(p.x));
         continue;
       }
@@ -118,15 +118,15 @@ std::vector<StrongFormPoint> EfgAnalysis::strong_form_nodes() const {
         const Vec3 inside = p.x + kFaceNudge * (face_centres[static_cast<std::size_t>(i)][f] - p.x);
         if (!test.on_surface(inside, faces[static_cast<std::size_t>(i)][f])) continue;
         any = true;
-        if (load.kind == EfgLoad::Kind::traction) p.face_tractions[f] += Vec3((*vec[0])(p.x), (*vec[1])(p.x), (*vec[2])(p.x));
+        if (load.kind == model::Load::Kind::traction) p.face_tractions[f] += Vec3((*vec[0])(p.x), (*vec[1])(p.x), (*vec[2])(p.x));
         else p.face_tractions[f] -= pressure(p.x) * p.face_normals[f];
       }
     }
-    if (!any && load.kind != EfgLoad::Kind::body_force)
-      throw InputError(load.region.label,
+    if (!any && load.kind != model::Load::Kind::body_force)
+      throw InputError(load.select.label,
                        "a selection that holds on a boundary face at some node (collocation and weighted least "
                        "squares impose tractions at the boundary nodes)",
-                       load.region.spec.describe() + " holds on no boundary face at a node");
+                       load.select.spec.describe() + " holds on no boundary face at a node");
   }
   return points;
 }
@@ -154,8 +154,8 @@ void EfgAnalysis::solve_strong_form(OutputSink* sink) {
     // body forces at the auxiliary points
     const Vec3 lower = problem_.cloud.positions.rowwise().minCoeff(), upper = problem_.cloud.positions.rowwise().maxCoeff();
     for (const auto& load : problem_.loads) {
-      if (load.kind != EfgLoad::Kind::body_force) continue;
-      RegionTest test(load.region, &cells_->map, [this](const Vec3& x) { return nearest_node(x); },
+      if (load.kind != model::Load::Kind::body_force) continue;
+      RegionTest test(load.select, &cells_->map, [this](const Vec3& x) { return nearest_node(x); },
                       1e-9 * (upper - lower).norm());
       std::array<std::unique_ptr<FieldEvaluator>, 3> vec;
       for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(load.vector[static_cast<std::size_t>(a)]);

@@ -13,37 +13,18 @@
 #include "geometry/expression.hpp"
 #include "geometry/geometry_spec.hpp"
 #include "geometry/selection.hpp"
+#include "model/constraint.hpp"
+#include "model/load.hpp"
+#include "model/selection.hpp"
 #include "material/linear_elastic.hpp"
 #include "mls/mls_options.hpp"
 
 namespace lamina::efg {
 
-/// A selection of the case: its geometric definition and the nodes it selected.
-struct Region {
-  geometry::SelectionSpec spec;   // kind all / where / box / set / nearest
-  IndexList nodes;                // resolved on the node cloud (non-empty)
-  std::string label;              // for messages, e.g. "boundary.0"
-};
-
 struct EfgMaterial {
   std::string name;
   material::LinearElastic elastic;
-  std::optional<Region> region;   // none = everywhere
-};
-
-/// Prescribed displacement components on a region (fix = value 0).
-struct EssentialCondition {
-  Region region;
-  std::array<bool, 3> constrained{false, false, false};
-  std::array<geometry::ScalarField, 3> value;  // prescribed u_i (constant or expression of x y z t)
-};
-
-struct EfgLoad {
-  enum class Kind { force, traction, pressure, body_force };
-  Kind kind = Kind::force;
-  Region region;
-  std::array<geometry::ScalarField, 3> vector;  // force (total), traction (per area), body force (per volume)
-  geometry::ScalarField scalar;                 // pressure (per area, positive pushes inwards)
+  std::optional<model::Selection> region;   // none = everywhere
 };
 
 /// How essential boundary conditions are imposed (see essential_boundary.hpp).
@@ -91,8 +72,8 @@ struct EfgProblem {
   geometry::GeometrySpec geometry;
   PointCloud cloud;
   std::vector<EfgMaterial> materials;
-  std::vector<EssentialCondition> constraints;
-  std::vector<EfgLoad> loads;
+  std::vector<model::Constraint> constraints;  // fix / displacement (velocity is refused by the reader of the case)
+  std::vector<model::Load> loads;              // force, traction, pressure, body_force
   EfgOptions options;
 };
 

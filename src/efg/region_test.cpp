@@ -4,7 +4,7 @@
 
 namespace lamina::efg {
 
-RegionTest::RegionTest(const Region& region, const geometry::VolumeMap* map, NearestNode nearest, Real tolerance)
+RegionTest::RegionTest(const model::Selection& region, const geometry::VolumeMap* map, NearestNode nearest, Real tolerance)
     : region_(&region), nearest_(std::move(nearest)), tolerance_(tolerance) {
   using Kind = geometry::SelectionSpec::Kind;
   if (region.spec.kind == Kind::where) expression_ = std::make_unique<geometry::Expression>(region.spec.expression);

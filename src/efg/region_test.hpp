@@ -1,5 +1,5 @@
 #pragma once
-// Tests whether a point lies in a case selection (efg::Region), for quadrature points:
+// Tests whether a point lies in a case selection (model::Selection), for quadrature points:
 //   all      always
 //   where    the expression is non-zero at the point
 //   box      min - tol <= x <= max + tol (tol = 1e-9 x body size)
@@ -20,7 +20,7 @@ namespace lamina::efg {
 class RegionTest {
  public:
   using NearestNode = std::function<Index(const Vec3&)>;
-  RegionTest(const Region& region, const geometry::VolumeMap* map, NearestNode nearest, Real tolerance);
+  RegionTest(const model::Selection& region, const geometry::VolumeMap* map, NearestNode nearest, Real tolerance);
 
   bool in_volume(const Vec3& x) const;
   /// face = 2 * axis + side of the boundary face the point lies on.
@@ -30,7 +30,7 @@ class RegionTest {
 
  private:
   bool nearest_in_nodes(const Vec3& x) const;
-  const Region* region_;
+  const model::Selection* region_;
   NearestNode nearest_;
   Real tolerance_;
   std::vector<int> faces_;  // set kind: generator faces of the set (empty: not a face set)

@@ -15,44 +15,18 @@
 #include "geometry/geometry_spec.hpp"
 #include "geometry/selection.hpp"
 #include "material/material_spec.hpp"
+#include "model/constraint.hpp"
+#include "model/load.hpp"
+#include "model/selection.hpp"
 
 namespace lamina::io {
 
-/// Where something came from in the case file (for messages raised after parsing).
-struct SourceLocation {
-  std::string file;
-  int line = 0, column = 0;
-  std::string key_path;
-};
-
-struct Selection {
-  geometry::SelectionSpec spec;
-  SourceLocation location;
-};
-
+using SourceLocation = model::SourceLocation;
+using Selection = model::Selection;
 
 struct MaterialEntry {
   material::MaterialSpec spec;
   std::optional<Selection> select;  // part of the body it applies to (none = everywhere)
-};
-
-struct BoundaryCondition {
-  Selection select;
-  std::array<bool, 6> fixed{};                             // x y z rx ry rz
-  std::array<std::optional<geometry::ScalarField>, 3> displacement;
-  std::array<std::optional<geometry::ScalarField>, 3> velocity;
-  Ramp ramp;
-  SourceLocation location;
-};
-
-struct Load {
-  enum class Kind { force, traction, pressure, body_force, mass, initial_velocity };
-  Kind kind = Kind::force;
-  Selection select;
-  std::array<geometry::ScalarField, 3> vector;  // force, traction, body_force, initial_velocity
-  geometry::ScalarField scalar;                 // pressure, mass
-  Ramp ramp;
-  SourceLocation location;
 };
 
 struct ProbeEntry {
@@ -103,8 +77,8 @@ struct Case {
   SourceLocation geometry_location;
   SourceLocation discretization_location;
   Discretization discretization;
-  std::vector<BoundaryCondition> boundary;
-  std::vector<Load> loads;
+  std::vector<model::Constraint> boundary;
+  std::vector<model::Load> loads;
   std::vector<ProbeEntry> probes;
   OutputOptions output;
   YAML::Node method_section;   // the `<method>:` mapping (may be undefined)

@@ -493,7 +493,7 @@ Case CaseReader::read() {
   if (b.defined() && b.expect_sequence()) {
     for (const auto& e : b.elements()) {
       if (!e.expect_map()) continue;
-      BoundaryCondition bc;
+      model::Constraint bc;
       bc.location = location_of(e);
       if (NodeReader select = e.required("select"); select.defined())
         if (auto s = read_selection(select)) bc.select = *s;
@@ -531,12 +531,12 @@ Case CaseReader::read() {
   // loads
   NodeReader l = root.child("loads");
   if (l.defined() && l.expect_sequence()) {
-    const std::vector<std::pair<std::string, Load::Kind>> kinds{
-        {"force", Load::Kind::force}, {"traction", Load::Kind::traction}, {"pressure", Load::Kind::pressure},
-        {"body_force", Load::Kind::body_force}, {"mass", Load::Kind::mass}, {"initial_velocity", Load::Kind::initial_velocity}};
+    const std::vector<std::pair<std::string, model::Load::Kind>> kinds{
+        {"force", model::Load::Kind::force}, {"traction", model::Load::Kind::traction}, {"pressure", model::Load::Kind::pressure},
+        {"body_force", model::Load::Kind::body_force}, {"mass", model::Load::Kind::mass}, {"initial_velocity", model::Load::Kind::initial_velocity}};
     for (const auto& e : l.elements()) {
       if (!e.expect_map()) continue;
-      Load load;
+      model::Load load;
       load.location = location_of(e);
       if (NodeReader select = e.required("select"); select.defined())
         if (auto s = read_selection(select)) load.select = *s;
@@ -545,9 +545,9 @@ Case CaseReader::read() {
         if (!e.has(name)) continue;
         ++count;
         load.kind = kind;
-        if (kind == Load::Kind::pressure || kind == Load::Kind::mass) {
+        if (kind == model::Load::Kind::pressure || kind == model::Load::Kind::mass) {
           load.scalar = read_scalar_field(e.child(name));
-          if (kind == Load::Kind::mass && load.scalar.is_constant() && !(load.scalar.constant > 0))
+          if (kind == model::Load::Kind::mass && load.scalar.is_constant() && !(load.scalar.constant > 0))
             e.child(name).error("a positive mass", fmt::format("{}", load.scalar.constant));
         } else {
           load.vector = read_vector_field(e.child(name));

@@ -359,23 +359,23 @@ Eigen::VectorXd MpfemAnalysis::load_vector() const {
   const Real thickness = problem_.thickness;
   auto at3 = [&](const Vec2& p) { return Vec3(p.x(), p.y(), problem_.z_mid); };
   for (const auto& load : problem_.loads) {
-    std::set<Index> selected(load.particles.begin(), load.particles.end());
-    if (load.kind == MpfemLoad::Kind::force) {
+    std::set<Index> selected(load.select.nodes.begin(), load.select.nodes.end());
+    if (load.kind == model::Load::Kind::force) {
       const FieldEvaluator fx(load.vector[0]), fy(load.vector[1]);
-      const Real share = 1.0 / static_cast<Real>(load.particles.size());
-      for (Index p : load.particles) {
+      const Real share = 1.0 / static_cast<Real>(load.select.nodes.size());
+      for (Index p : load.select.nodes) {
         f[2 * p] += share * fx(at3(x.col(p)));
         f[2 * p + 1] += share * fy(at3(x.col(p)));
       }
-    } else if (load.kind == MpfemLoad::Kind::body_force) {
+    } else if (load.kind == model::Load::Kind::body_force) {
       const FieldEvaluator bx(load.vector[0]), by(load.vector[1]);
-      for (Index p : load.particles) {
+      for (Index p : load.select.nodes) {
         const Real dv = thickness * discretization_.area_weight[p];
         f[2 * p] += dv * bx(at3(x.col(p)));
         f[2 * p + 1] += dv * by(at3(x.col(p)));
       }
     } else {
-      const bool pressure = load.kind == MpfemLoad::Kind::pressure;
+      const bool pressure = load.kind == model::Load::Kind::pressure;
       const FieldEvaluator tx(load.vector[0]), ty(load.vector[1]), pr(load.scalar);
       auto traction = [&](const Vec2& p, const Vec2& normal) -> Vec2 {
         if (pressure) return -pr(at3(p)) * normal;
@@ -399,10 +399,10 @@ Eigen::VectorXd MpfemAnalysis::load_vector() const {
         }
       }
       if (segments == 0)
-        throw InputError(load.label + ".select",
+        throw InputError(load.select.label + ".select",
                          "a selection containing two adjacent boundary particles (traction and pressure act on "
                          "boundary segments between selected particles)",
-                         fmt::format("{} particle(s), no boundary segment", load.particles.size()));
+                         fmt::format("{} particle(s), no boundary segment", load.select.nodes.size()));
     }
   }
   return f;

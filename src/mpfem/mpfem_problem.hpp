@@ -11,6 +11,7 @@
 #include "geometry/expression.hpp"
 #include "material/linear_elastic.hpp"
 #include "material/material_spec.hpp"
+#include "model/load.hpp"
 #include "mpfem/particle_elements.hpp"
 
 namespace lamina::mpfem {
@@ -69,15 +70,6 @@ struct PlaneMaterial {
   Real out_of_plane(const Eigen::Vector3d& strain) const;
 };
 
-struct MpfemLoad {
-  enum class Kind { force, traction, pressure, body_force };
-  Kind kind = Kind::force;
-  IndexList particles;                          // selected particles
-  std::array<geometry::ScalarField, 2> vector;  // force (total), traction (per area), body force (per volume)
-  geometry::ScalarField scalar;                 // pressure (per area, positive pushes inwards)
-  std::string label;                            // for messages, e.g. "loads.0"
-};
-
 struct MpfemProblem {
   ParticleLayout layout;
   /// voronoi: the body's boundary polygon (particle indices, counter-clockwise; mesh_boundary.hpp);
@@ -91,7 +83,7 @@ struct MpfemProblem {
   std::vector<material::MaterialModel> material_models;
   std::vector<int> material_of_particle;        // index into materials, per particle
   std::vector<PrescribedDof> prescribed;        // essential conditions on particle dofs
-  std::vector<MpfemLoad> loads;
+  std::vector<model::Load> loads;              // force, traction, pressure, body_force (x-y components)
   MpfemOptions options;
 };
 

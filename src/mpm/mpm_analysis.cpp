@@ -90,17 +90,17 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   f_int_ = m_int_ = f_ext_ = m_ext_ = f_net_ = Eigen::Matrix3Xd::Zero(3, n);
 
   for (const auto& c : problem_.constraints)
-    for (Index node : c.nodes)
+    for (Index node : c.select.nodes)
       for (int a = 0; a < 3; ++a) {
         if (c.fixed[static_cast<std::size_t>(a)] || c.velocity[static_cast<std::size_t>(a)]) free_(a, node) = 0.0;
         if (c.fixed[static_cast<std::size_t>(a + 3)]) rotation_free_(a, node) = 0.0;
       }
   for (const auto& l : problem_.loads) {
-    if (l.kind == NodalLoad::Kind::mass) {
-      const Real each = l.scalar.constant / static_cast<Real>(l.nodes.size());
-      for (Index node : l.nodes) mass_[node] += each;
-    } else if (l.kind == NodalLoad::Kind::initial_velocity) {
-      for (Index node : l.nodes)
+    if (l.kind == model::Load::Kind::mass) {
+      const Real each = l.scalar.constant / static_cast<Real>(l.select.nodes.size());
+      for (Index node : l.select.nodes) mass_[node] += each;
+    } else if (l.kind == model::Load::Kind::initial_velocity) {
+      for (Index node : l.select.nodes)
         for (int a = 0; a < 3; ++a) {
           const auto& f = l.vector[static_cast<std::size_t>(a)];
           const Real value = f.is_constant() ? f.constant : geometry::Expression(f.expression).evaluate(reference_.col(node), 0.0);
@@ -240,18 +240,18 @@ void MpmAnalysis::prepare_loads() {
         prepared.expressions[static_cast<std::size_t>(a)] = std::make_shared<geometry::Expression>(l.vector[static_cast<std::size_t>(a)].expression);
     if (!l.scalar.is_constant()) prepared.scalar_expression = std::make_shared<geometry::Expression>(l.scalar.expression);
     std::vector<char> selected(static_cast<std::size_t>(x_.cols()), 0);
-    for (Index node : l.nodes) selected[static_cast<std::size_t>(node)] = 1;
-    const Real share = 1.0 / static_cast<Real>(l.nodes.size());
+    for (Index node : l.select.nodes) selected[static_cast<std::size_t>(node)] = 1;
+    const Real share = 1.0 / static_cast<Real>(l.select.nodes.size());
     switch (l.kind) {
-      case NodalLoad::Kind::force:
-      case NodalLoad::Kind::moment:
-        for (Index node : l.nodes) prepared.weights.push_back({node, share});
+      case model::Load::Kind::force:
+      case model::Load::Kind::moment:
+        for (Index node : l.select.nodes) prepared.weights.push_back({node, share});
         break;
-      case NodalLoad::Kind::body_force:
-        for (Index node : l.nodes) prepared.weights.push_back({node, mass_[node]});
+      case model::Load::Kind::body_force:
+        for (Index node : l.select.nodes) prepared.weights.push_back({node, mass_[node]});
         break;
-      case NodalLoad::Kind::traction:
-      case NodalLoad::Kind::edge_moment: {
+      case model::Load::Kind::traction:
+      case model::Load::Kind::edge_moment: {
         // force (moment) per unit length on the boundary edges whose two nodes are selected (reference lengths)
         std::map<Index, Real> length_share;
         for (const auto& [edge, count] : uses) {
@@ -263,7 +263,7 @@ void MpmAnalysis::prepare_loads() {
         for (const auto& [node, w] : length_share) prepared.weights.push_back({node, w});
         break;
       }
-      case NodalLoad::Kind::pressure:
+      case model::Load::Kind::pressure:
         for (Index e = 0; e < mesh.element_count(); ++e) {
           bool all = true;
           for (int a = 0; a < 4; ++a) all = all && selected[static_cast<std::size_t>(mesh.quads(a, e))];
@@ -272,11 +272,11 @@ void MpmAnalysis::prepare_loads() {
         break;
       default: break;
     }
-    const bool per_edge = l.kind == NodalLoad::Kind::traction || l.kind == NodalLoad::Kind::edge_moment;
-    if ((per_edge && prepared.weights.empty()) || (l.kind == NodalLoad::Kind::pressure && prepared.elements.empty()))
-      throw InputError(l.label, per_edge ? "a selection holding at least one free edge of the shell (both end nodes)"
+    const bool per_edge = l.kind == model::Load::Kind::traction || l.kind == model::Load::Kind::edge_moment;
+    if ((per_edge && prepared.weights.empty()) || (l.kind == model::Load::Kind::pressure && prepared.elements.empty()))
+      throw InputError(l.select.label, per_edge ? "a selection holding at least one free edge of the shell (both end nodes)"
                                                                       : "a selection holding all four nodes of at least one element",
-                       fmt::format("{} nodes and none", l.nodes.size()));
+                       fmt::format("{} nodes and none", l.select.nodes.size()));
     prepared_loads_.push_back(std::move(prepared));
   }
 }
@@ -287,7 +287,7 @@ void MpmAnalysis::compute_external_forces(Real load) {
   const ShellMesh& mesh = problem_.mesh;
   const Real s = problem_.options.analysis == MpmOptions::Kind::quasi_static ? load : time_ / problem_.options.end_time;
   for (std::size_t k = 0; k < problem_.loads.size(); ++k) {
-    const NodalLoad& l = problem_.loads[k];
+    const model::Load& l = problem_.loads[k];
     const PreparedLoad& prepared = prepared_loads_[k];
     const Real factor = l.ramp.factor(s);
     if (factor == 0.0) continue;
@@ -299,16 +299,16 @@ void MpmAnalysis::compute_external_forces(Real load) {
       return value;
     };
     switch (l.kind) {
-      case NodalLoad::Kind::force:
-      case NodalLoad::Kind::traction:
-      case NodalLoad::Kind::body_force:
+      case model::Load::Kind::force:
+      case model::Load::Kind::traction:
+      case model::Load::Kind::body_force:
         for (const auto& [node, w] : prepared.weights) f_ext_.col(node) += factor * w * vector_at(node);
         break;
-      case NodalLoad::Kind::moment:
-      case NodalLoad::Kind::edge_moment:
+      case model::Load::Kind::moment:
+      case model::Load::Kind::edge_moment:
         for (const auto& [node, w] : prepared.weights) m_ext_.col(node) += factor * w * vector_at(node);
         break;
-      case NodalLoad::Kind::pressure:
+      case model::Load::Kind::pressure:
         for (Index e : prepared.elements) {
           const Vec3 d1 = x_.col(mesh.quads(2, e)) - x_.col(mesh.quads(0, e)), d2 = x_.col(mesh.quads(3, e)) - x_.col(mesh.quads(1, e));
           const Vec3 area_normal = 0.5 * d1.cross(d2);  // |.| = area of a planar quad, outward by the mesh orientation
@@ -332,7 +332,7 @@ void MpmAnalysis::apply_prescribed(Real load) {
       if (!f) continue;
       std::unique_ptr<geometry::Expression> e;
       if (!f->is_constant()) e = std::make_unique<geometry::Expression>(f->expression);
-      for (Index node : c.nodes) {
+      for (Index node : c.select.nodes) {
         v_(a, node) = factor * field_value(*f, e.get(), reference_.col(node), time_);
         vpos_(a, node) = v_(a, node);
       }

@@ -10,28 +10,11 @@
 #include "core/ramp.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
+#include "model/constraint.hpp"
+#include "model/load.hpp"
 #include "shell/belytschko_tsay_shell.hpp"
 
 namespace lamina::mpm {
-
-/// Velocity conditions at shell nodes (fix = zero velocity), applied on the grid and at the nodes (eq (7)).
-struct NodalConstraint {
-  IndexList nodes;
-  std::array<bool, 6> fixed{};                                          // x y z rx ry rz
-  std::array<std::optional<geometry::ScalarField>, 3> velocity;         // prescribed, expressions of x y z t
-  Ramp ramp;  // progress s: the load factor (quasi-static) or t / end_time (dynamic)
-  std::string label;
-};
-
-struct NodalLoad {
-  enum class Kind { force, traction, pressure, body_force, moment, edge_moment, mass, initial_velocity };
-  Kind kind = Kind::force;
-  IndexList nodes;
-  std::array<geometry::ScalarField, 3> vector;  // force / traction / body force (per unit mass) / moment / moment per unit edge length / velocity
-  geometry::ScalarField scalar;                 // pressure, mass
-  Ramp ramp;  // progress s: the load factor (quasi-static) or t / end_time (dynamic)
-  std::string label;
-};
 
 struct MpmOptions {
   enum class Kind { quasi_static, dynamic };
@@ -67,8 +50,11 @@ struct MpmProblem {
   Real young = 0.0, poisson = 0.0, density = 0.0;
   Real yield_stress = 0.0, hardening = 0.0;      // j2_plasticity: sigma_y = yield_stress + hardening * eps_p
   shell::ShellSection section;
-  std::vector<NodalConstraint> constraints;
-  std::vector<NodalLoad> loads;
+  /// Velocity conditions at shell nodes (fix = zero velocity; a zero displacement is a fixed component),
+  /// applied on the grid and at the nodes (eq (7)); ramps over the load factor (quasi-static) or t / end_time.
+  std::vector<model::Constraint> constraints;
+  /// force, traction, pressure, body_force (per unit mass), moment, edge_moment, mass, initial_velocity.
+  std::vector<model::Load> loads;
   MpmOptions options;
 };
 

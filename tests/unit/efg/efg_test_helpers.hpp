@@ -18,8 +18,8 @@ inline geometry::GeometrySpec box(const Vec3& lo, const Vec3& hi) {
   return g;
 }
 
-inline Region where(const std::string& expression, const PointCloud& cloud) {
-  Region r;
+inline model::Selection where(const std::string& expression, const PointCloud& cloud) {
+  model::Selection r;
   r.spec.kind = geometry::SelectionSpec::Kind::where;
   r.spec.expression = expression;
   r.nodes = geometry::resolve_selection(r.spec, cloud.positions, cloud.sets);
@@ -27,8 +27,8 @@ inline Region where(const std::string& expression, const PointCloud& cloud) {
   return r;
 }
 
-inline Region set(const std::string& name, const PointCloud& cloud) {
-  Region r;
+inline model::Selection set(const std::string& name, const PointCloud& cloud) {
+  model::Selection r;
   r.spec.kind = geometry::SelectionSpec::Kind::set;
   r.spec.set_name = name;
   r.nodes = geometry::resolve_selection(r.spec, cloud.positions, cloud.sets);
@@ -90,21 +90,21 @@ inline EfgProblem make_problem(const geometry::GeometrySpec& g, const std::array
 /// symmetry planes x = 10 and y = 10 if `symmetry`. E = 1e4.
 inline EfgProblem clamped_plate_quarter(const std::array<int, 3>& nodes, Real nu, Real patch, bool symmetry) {
   EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(10, 10, 1)), nodes, 1e4, nu);
-  EssentialCondition clamp;
-  clamp.region = where("x < 1e-9 or y < 1e-9", p.cloud);
-  clamp.constrained = {true, true, true};
+  model::Constraint clamp;
+  clamp.select = where("x < 1e-9 or y < 1e-9", p.cloud);
+  clamp.fixed = {true, true, true};
   p.constraints.push_back(clamp);
   if (symmetry) {
     for (int a = 0; a < 2; ++a) {
-      EssentialCondition plane;
-      plane.region = where(a == 0 ? "x > 10 - 1e-9" : "y > 10 - 1e-9", p.cloud);
-      plane.constrained = {a == 0, a == 1, false};
+      model::Constraint plane;
+      plane.select = where(a == 0 ? "x > 10 - 1e-9" : "y > 10 - 1e-9", p.cloud);
+      plane.fixed = {a == 0, a == 1, false};
       p.constraints.push_back(plane);
     }
   }
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::pressure;
-  load.region = where(fmt::format("x > {0:.17g} and y > {0:.17g} and z > 1 - 1e-9", patch), p.cloud);
+  model::Load load;
+  load.kind = model::Load::Kind::pressure;
+  load.select = where(fmt::format("x > {0:.17g} and y > {0:.17g} and z > 1 - 1e-9", patch), p.cloud);
   load.scalar = constant(400.0);
   p.loads.push_back(load);
   return p;
@@ -137,27 +137,27 @@ inline EfgProblem patch_problem(int n, Real jitter) {
       p.cloud.positions.col(i) = x;
     }
   }
-  EssentialCondition c;
-  c.region = where("x < 1e-9 or x > 1 - 1e-9 or y < 1e-9 or y > 1 - 1e-9 or z < 1e-9 or z > 1 - 1e-9", p.cloud);
-  c.constrained = {true, true, true};
-  for (int a = 0; a < 3; ++a) c.value[static_cast<std::size_t>(a)] = field(linear_field()[static_cast<std::size_t>(a)]);
+  model::Constraint c;
+  c.select = where("x < 1e-9 or x > 1 - 1e-9 or y < 1e-9 or y > 1 - 1e-9 or z < 1e-9 or z > 1 - 1e-9", p.cloud);
+  c.fixed = {true, true, true};
+  for (int a = 0; a < 3; ++a) c.displacement[static_cast<std::size_t>(a)] = field(linear_field()[static_cast<std::size_t>(a)]);
   p.constraints.push_back(c);
   return p;
 }
 
 /// Zero values of the given components on the named node set.
 inline void fix_set(EfgProblem& p, const std::string& name, const std::array<bool, 3>& components = {true, true, true}) {
-  EssentialCondition c;
-  c.region = set(name, p.cloud);
-  c.constrained = components;
+  model::Constraint c;
+  c.select = set(name, p.cloud);
+  for (std::size_t a = 0; a < 3; ++a) c.fixed[a] = components[a];
   p.constraints.push_back(c);
 }
 
 /// A constant traction on the boundary faces of the named node set.
 inline void traction_on_set(EfgProblem& p, const std::string& name, const Vec3& t) {
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::traction;
-  load.region = set(name, p.cloud);
+  model::Load load;
+  load.kind = model::Load::Kind::traction;
+  load.select = set(name, p.cloud);
   load.vector = {constant(t.x()), constant(t.y()), constant(t.z())};
   p.loads.push_back(load);
 }

@@ -13,9 +13,9 @@ EfgProblem bar(const std::array<int, 3>& nodes, Real nu) {
   EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(4, 2, 2)), nodes, 1e4, nu);
   const char* names[3] = {"xmin", "ymin", "zmin"};
   for (int a = 0; a < 3; ++a) {
-    EssentialCondition c;
-    c.region = set(names[a], p.cloud);
-    c.constrained[static_cast<std::size_t>(a)] = true;
+    model::Constraint c;
+    c.select = set(names[a], p.cloud);
+    c.fixed[static_cast<std::size_t>(a)] = true;
     p.constraints.push_back(c);
   }
   return p;
@@ -23,9 +23,9 @@ EfgProblem bar(const std::array<int, 3>& nodes, Real nu) {
 
 TEST(Bar, TensionWithSymmetryPlanesIsExact) {
   EfgProblem p = bar({13, 5, 5}, 1.0 / 3.0);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::traction;
-  load.region = set("xmax", p.cloud);
+  model::Load load;
+  load.kind = model::Load::Kind::traction;
+  load.select = set("xmax", p.cloud);
   load.vector = {constant(1.0), constant(0.0), constant(0.0)};
   p.loads.push_back(load);
   p.options.mls.basis = mls::Basis::linear;
@@ -43,7 +43,7 @@ TEST(Bar, TensionWithSymmetryPlanesIsExact) {
     EXPECT_NEAR(s[0], 1.0, 1e-9);
     for (int k = 1; k < 6; ++k) EXPECT_NEAR(s[k], 0.0, 1e-9);
   }
-  const Vec3 r = a.reaction(p.constraints[0].region.nodes);
+  const Vec3 r = a.reaction(p.constraints[0].select.nodes);
   EXPECT_NEAR(r[0], -4.0, 1e-9);
   EXPECT_NEAR(a.internal_energy(), 0.5 * 16 / 1e4, 1e-12);
 }
@@ -52,9 +52,9 @@ TEST(Bar, HangingUnderBodyForceMatchesTheQuadraticSolution) {
   // body force b along -x on a bar fixed (symmetry) at x = 0: with nu = 0 the solution is 1D,
   // sigma_xx = -b (L - x), u_x = -(b / E) (L x - x^2 / 2).
   EfgProblem p = bar({17, 3, 3}, 0.0);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::body_force;
-  load.region.spec.kind = geometry::SelectionSpec::Kind::all;
+  model::Load load;
+  load.kind = model::Load::Kind::body_force;
+  load.select.spec.kind = geometry::SelectionSpec::Kind::all;
   load.vector = {constant(-10.0), constant(0.0), constant(0.0)};
   p.loads.push_back(load);
   p.options.mls.basis = mls::Basis::quadratic;
@@ -69,16 +69,16 @@ TEST(Bar, HangingUnderBodyForceMatchesTheQuadraticSolution) {
     EXPECT_NEAR(a.displacement_at(Vec3(x, 1, 1))[0], exact, 1e-3 * std::abs(-(b / E) * 0.5 * L * L));
     EXPECT_NEAR(a.stress_at(Vec3(x, 1, 1))[0], -b * (L - x), 2e-2 * b * L);
   }
-  EXPECT_NEAR(a.reaction(p.constraints[0].region.nodes)[0], b * 4 * 2 * 2, 1e-6 * b * 16);
+  EXPECT_NEAR(a.reaction(p.constraints[0].select.nodes)[0], b * 4 * 2 * 2, 1e-6 * b * 16);
 }
 
 TEST(Bar, PenaltyConvergesToTheConstrainedSolution) {
   Real previous = INFINITY;
   for (Real factor : {1e3, 1e5, 1e7}) {
     EfgProblem p = bar({9, 3, 3}, 0.25);
-    EfgLoad load;
-    load.kind = EfgLoad::Kind::traction;
-    load.region = set("xmax", p.cloud);
+    model::Load load;
+    load.kind = model::Load::Kind::traction;
+    load.select = set("xmax", p.cloud);
     load.vector = {constant(1.0), constant(0.0), constant(0.0)};
     p.loads.push_back(load);
     p.options.mls.basis = mls::Basis::linear;
@@ -104,14 +104,14 @@ using namespace testing;
 
 TEST(Bar, LagrangeMultipliersEnforceTheValuesExactlyAtTheConstrainedNodes) {
   EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(4, 1, 1)), {9, 3, 3}, 1e4, 0.3);
-  EssentialCondition clamp;
-  clamp.region = set("xmin", p.cloud);
-  clamp.constrained = {true, true, true};
-  clamp.value = {constant(1e-3), constant(0.0), field("2e-3*y")};
+  model::Constraint clamp;
+  clamp.select = set("xmin", p.cloud);
+  clamp.fixed = {true, true, true};
+  clamp.displacement = {constant(1e-3), constant(0.0), field("2e-3*y")};
   p.constraints.push_back(clamp);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::force;
-  load.region = set("xmax", p.cloud);
+  model::Load load;
+  load.kind = model::Load::Kind::force;
+  load.select = set("xmax", p.cloud);
   load.vector = {constant(0.0), constant(-1.0), constant(0.0)};
   p.loads.push_back(load);
   p.options.mls.basis = mls::Basis::quadratic;
@@ -119,7 +119,7 @@ TEST(Bar, LagrangeMultipliersEnforceTheValuesExactlyAtTheConstrainedNodes) {
   p.options.essential = EssentialMethod::lagrange;
   EfgAnalysis a(p, {});
   a.solve();
-  for (Index node : clamp.region.nodes) {
+  for (Index node : clamp.select.nodes) {
     const Vec3 x = p.cloud.positions.col(node);
     const Vec3 u = a.displacement_at(x);
     EXPECT_NEAR(u[0], 1e-3, 1e-12);
@@ -128,7 +128,7 @@ TEST(Bar, LagrangeMultipliersEnforceTheValuesExactlyAtTheConstrainedNodes) {
   }
   // the multipliers balance the applied force
   EXPECT_NEAR(a.reaction({})[1], 1.0, 1e-8);
-  EXPECT_EQ(a.counts().dofs, 3 * p.cloud.size() + 3 * static_cast<Index>(clamp.region.nodes.size()));
+  EXPECT_EQ(a.counts().dofs, 3 * p.cloud.size() + 3 * static_cast<Index>(clamp.select.nodes.size()));
 }
 
 }  // namespace

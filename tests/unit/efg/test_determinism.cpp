@@ -18,9 +18,9 @@ using namespace testing;
 
 EfgProblem plate() {
   EfgProblem p = clamped_plate_quarter({9, 9, 3}, 0.3, 9.0, false);
-  EfgLoad weight;
-  weight.kind = EfgLoad::Kind::body_force;
-  weight.region.spec.kind = geometry::SelectionSpec::Kind::all;
+  model::Load weight;
+  weight.kind = model::Load::Kind::body_force;
+  weight.select.spec.kind = geometry::SelectionSpec::Kind::all;
   weight.vector = {constant(0.0), constant(0.0), field("-1 - 0.1*x")};
   p.loads.push_back(weight);
   p.options.mls.basis = mls::Basis::quadratic;
@@ -32,9 +32,9 @@ EfgProblem plate() {
 /// A strip 40 x 4 x 1: with 2 threads the cells assembled at the same time are far apart (direct writes).
 EfgProblem strip() {
   EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(40, 4, 1)), {41, 5, 3}, 1e4, 0.3);
-  EssentialCondition clamp;
-  clamp.region = where("x < 1e-9", p.cloud);
-  clamp.constrained = {true, true, true};
+  model::Constraint clamp;
+  clamp.select = where("x < 1e-9", p.cloud);
+  clamp.fixed = {true, true, true};
   p.constraints.push_back(clamp);
   p.options.mls.basis = mls::Basis::quadratic;
   p.options.mls.kappa = 2.5;

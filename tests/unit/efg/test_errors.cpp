@@ -41,7 +41,7 @@ TEST(EfgErrors, SupportTooSmallForTheBasisIsAnInputError) {
 
 TEST(EfgErrors, FreeRigidBodyModeIsAnAnalysisError) {
   EfgProblem p = cantilever();
-  p.constraints[0].constrained = {true, false, false};  // y and z translations free
+  p.constraints[0].fixed = {true, false, false};  // y and z translations free
   EfgAnalysis a(p, {});
   EXPECT_THROW(a.solve(), AnalysisError);
 }
@@ -51,16 +51,16 @@ TEST(EfgErrors, FreeRigidBodyModeIsAnAnalysisError) {
 /// misses the equations by a relative residual of ~1e7: it must stop (exit 3), not return garbage.
 TEST(EfgErrors, NearlySingularSystemIsAnAnalysisError) {
   EfgProblem p = make_problem(box(Vec3::Zero(), Vec3(10, 10, 1)), {11, 11, 3}, 1e4, 0.4999);
-  EssentialCondition clamp;
-  clamp.region = set("xmin", p.cloud);
-  clamp.constrained = {true, true, true};
+  model::Constraint clamp;
+  clamp.select = set("xmin", p.cloud);
+  clamp.fixed = {true, true, true};
   p.constraints.push_back(clamp);
-  EssentialCondition clamp_y = clamp;
-  clamp_y.region = set("ymin", p.cloud);
+  model::Constraint clamp_y = clamp;
+  clamp_y.select = set("ymin", p.cloud);
   p.constraints.push_back(clamp_y);
-  EfgLoad load;
-  load.kind = EfgLoad::Kind::traction;
-  load.region = set("zmax", p.cloud);
+  model::Load load;
+  load.kind = model::Load::Kind::traction;
+  load.select = set("zmax", p.cloud);
   load.vector = {constant(0.0), constant(0.0), constant(-1.0)};
   p.loads.push_back(load);
   p.options.mls.basis = mls::Basis::quadratic;
@@ -86,8 +86,8 @@ TEST(EfgErrors, NodeOutsideTheBodyIsAnInputError) {
 
 TEST(EfgErrors, TractionOnNoSurfaceIsAnInputError) {
   EfgProblem p = cantilever();
-  p.loads[0].region = where("x > 1.9 and x < 2.1 and y > 0.4 and y < 0.6 and z > 0.4 and z < 0.6", p.cloud);
-  ASSERT_FALSE(p.loads[0].region.nodes.empty());
+  p.loads[0].select = where("x > 1.9 and x < 2.1 and y > 0.4 and y < 0.6 and z > 0.4 and z < 0.6", p.cloud);
+  ASSERT_FALSE(p.loads[0].select.nodes.empty());
   EfgAnalysis a(p, {});
   EXPECT_THROW(a.solve(), InputError);
 }

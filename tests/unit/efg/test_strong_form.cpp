@@ -125,16 +125,16 @@ TEST_P(StrongFormQuadraticTest, QuadraticFieldWithBodyForceIsExact) {
   p.options.formulation = GetParam();
   p.options.mls.basis = mls::Basis::quadratic;
   p.options.mls.kappa = 2.5;
-  EssentialCondition c;
-  c.region = where("x < 1e-9 or x > 1 - 1e-9 or y < 1e-9 or y > 1 - 1e-9 or z < 1e-9 or z > 1 - 1e-9", p.cloud);
-  c.constrained = {true, true, true};
-  c.value = {field("1e-3*(x^2 + y*z)"), field("1e-3*x*y"), field("1e-3*z^2")};
+  model::Constraint c;
+  c.select = where("x < 1e-9 or x > 1 - 1e-9 or y < 1e-9 or y > 1 - 1e-9 or z < 1e-9 or z > 1 - 1e-9", p.cloud);
+  c.fixed = {true, true, true};
+  c.displacement = {field("1e-3*(x^2 + y*z)"), field("1e-3*x*y"), field("1e-3*z^2")};
   p.constraints.push_back(c);
-  EfgLoad b;
-  b.kind = EfgLoad::Kind::body_force;
-  b.region.spec.kind = geometry::SelectionSpec::Kind::all;
-  b.region.label = "all";
-  for (Index i = 0; i < p.cloud.size(); ++i) b.region.nodes.push_back(i);
+  model::Load b;
+  b.kind = model::Load::Kind::body_force;
+  b.select.spec.kind = geometry::SelectionSpec::Kind::all;
+  b.select.label = "all";
+  for (Index i = 0; i < p.cloud.size(); ++i) b.select.nodes.push_back(i);
   b.vector = {constant(-3.2e-3), constant(0.0), constant(-2.4e-3)};
   p.loads.push_back(b);
   EfgAnalysis a(p, {});
@@ -163,9 +163,9 @@ EfgProblem bar_problem(Formulation formulation, bool clamped) {
   p.options.essential = EssentialMethod::nitsche;
   p.options.correction = IntegrationCorrection::vci;
   auto condition = [&](const std::string& set_name, std::array<bool, 3> constrained) {
-    EssentialCondition c;
-    c.region = set(set_name, p.cloud);
-    c.constrained = constrained;
+    model::Constraint c;
+    c.select = set(set_name, p.cloud);
+    for (std::size_t a = 0; a < 3; ++a) c.fixed[a] = constrained[a];
     p.constraints.push_back(c);
   };
   if (clamped) {
@@ -175,9 +175,9 @@ EfgProblem bar_problem(Formulation formulation, bool clamped) {
     condition("ymin", {false, true, false});
     condition("zmin", {false, false, true});
   }
-  EfgLoad t;
-  t.kind = EfgLoad::Kind::traction;
-  t.region = set("xmax", p.cloud);
+  model::Load t;
+  t.kind = model::Load::Kind::traction;
+  t.select = set("xmax", p.cloud);
   t.vector = {constant(1.0), constant(0.0), constant(0.0)};
   p.loads.push_back(t);
   return p;
@@ -199,7 +199,7 @@ TEST_P(StrongFormBarTest, UniaxialTensionWithSymmetryConditionsIsExact) {
   EXPECT_LT(du, 1e-6);
   EXPECT_LT(ds, 1e-6);
   // reaction on x = 0 from the traction sigma(u^h) n there: -4
-  EXPECT_NEAR(a.reaction(a.problem().constraints[0].region.nodes).x(), -4.0, 1e-5);
+  EXPECT_NEAR(a.reaction(a.problem().constraints[0].select.nodes).x(), -4.0, 1e-5);
   EXPECT_NEAR(a.internal_energy(), 8e-4, 1e-9);
 }
 
@@ -212,9 +212,9 @@ TEST(StrongFormBarLoads, PressureOnAWhereSelectionLoadsOnlyItsFace) {
   for (Formulation f : {Formulation::collocation, Formulation::weighted_least_squares}) {
     EfgProblem p = bar_problem(f, false);
     p.loads.clear();
-    EfgLoad load;
-    load.kind = EfgLoad::Kind::pressure;
-    load.region = where("x > 4 - 1e-9", p.cloud);
+    model::Load load;
+    load.kind = model::Load::Kind::pressure;
+    load.select = where("x > 4 - 1e-9", p.cloud);
     load.scalar = constant(-1.0);
     p.loads.push_back(load);
     EfgAnalysis a(p, {});
@@ -233,14 +233,14 @@ TEST(StrongFormCurvedFaces, RoundBarInTensionIsExact) {
     EfgProblem p = make_problem(g, {4, 12, 9}, 1e4, 0.25);
     p.options.formulation = f;
     p.options.mls.kappa = 2.5;
-    EssentialCondition c;
-    c.region = set("end0", p.cloud);
-    c.constrained = {true, true, true};
-    c.value = {field("1e-4*x"), field("-0.25e-4*y"), field("-0.25e-4*z")};
+    model::Constraint c;
+    c.select = set("end0", p.cloud);
+    c.fixed = {true, true, true};
+    c.displacement = {field("1e-4*x"), field("-0.25e-4*y"), field("-0.25e-4*z")};
     p.constraints.push_back(c);
-    EfgLoad t;
-    t.kind = EfgLoad::Kind::traction;
-    t.region = set("end1", p.cloud);
+    model::Load t;
+    t.kind = model::Load::Kind::traction;
+    t.select = set("end1", p.cloud);
     t.vector = {constant(1.0), constant(0.0), constant(0.0)};
     p.loads.push_back(t);
     EfgAnalysis a(p, {});
@@ -277,7 +277,7 @@ TEST(StrongFormClampedBar, DegradesWhereGalerkinStaysAccurate) {
   EXPECT_GT(ec, 2.0 * eg);   // the strong forms are clearly worse (measured: 1.9 %, 6.7 %, 48 %)
   EXPECT_GT(ew, 2.0 * eg);
   // the reaction on the clamped face balances P = 4 in Galerkin, not in the strong forms
-  const IndexList& clamped = galerkin.problem().constraints[0].region.nodes;
+  const IndexList& clamped = galerkin.problem().constraints[0].select.nodes;
   EXPECT_NEAR(galerkin.reaction(clamped).x(), -4.0, 0.01 * 4.0);
   EXPECT_GT(std::abs(collocation.reaction(clamped).x() + 4.0), 0.1 * 4.0);
   EXPECT_GT(std::abs(wlsm.reaction(clamped).x() + 4.0), 0.1 * 4.0);
@@ -314,9 +314,9 @@ TEST(StrongFormErrors, LinearBasisPointForceAndSeveralMaterialsAreInputErrors) {
 
   p.options.mls.basis = mls::Basis::quadratic;
   p.options.mls.kappa = 2.5;
-  EfgLoad f;
-  f.kind = EfgLoad::Kind::force;
-  f.region = set("xmax", p.cloud);
+  model::Load f;
+  f.kind = model::Load::Kind::force;
+  f.select = set("xmax", p.cloud);
   f.vector = {constant(1.0), constant(0.0), constant(0.0)};
   p.loads.push_back(f);
   EfgAnalysis with_force(p, {});

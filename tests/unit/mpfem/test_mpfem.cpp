@@ -159,9 +159,9 @@ MpfemProblem patch_problem(const ParticleLayout& layout, Real width, Real height
     p.prescribed.push_back({q, 1, 1e-3 * (-1 + 1.5 * x.x() - x.y())});
   }
   auto traction = [&](const IndexList& particles, Real tx, Real ty) {
-    MpfemLoad load;
-    load.kind = MpfemLoad::Kind::traction;
-    load.particles = particles;
+    model::Load load;
+    load.kind = model::Load::Kind::traction;
+    load.select.nodes = particles;
     load.vector[0].constant = tx;
     load.vector[1].constant = ty;
     p.loads.push_back(load);
@@ -218,8 +218,8 @@ MpfemAnalysis::Errors cantilever(int n0, int n1, ElementKind element, Real& tip,
   p.options.exact_displacement = std::array<std::string, 2>{
       "-" + c + "*y*((6*48-3*x)*x+(2+0.3)*(y^2-36))", c + "*(3*0.3*y^2*(48-x)+(4+5*0.3)*144*x/4+(3*48-x)*x^2)"};
   const Real k = 1000.0 / (6 * 3e7 * 144);
-  MpfemLoad load;
-  load.kind = MpfemLoad::Kind::traction;
+  model::Load load;
+  load.kind = model::Load::Kind::traction;
   load.vector[1].expression = "1000/(2*144)*(36-y^2)";
   for (Index q = 0; q < p.layout.positions.cols(); ++q) {
     const Vec2 x = p.layout.positions.col(q);
@@ -228,7 +228,7 @@ MpfemAnalysis::Errors cantilever(int n0, int n1, ElementKind element, Real& tip,
       p.prescribed.push_back({q, 0, -k * y * ((2 + 0.3) * (y * y - 36))});
       p.prescribed.push_back({q, 1, k * 3 * 0.3 * y * y * 48});
     }
-    if (x.x() > 48 - 1e-9) load.particles.push_back(q);
+    if (x.x() > 48 - 1e-9) load.select.nodes.push_back(q);
   }
   p.loads.push_back(load);
   MpfemAnalysis analysis(p, {});

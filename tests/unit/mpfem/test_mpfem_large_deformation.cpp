@@ -207,9 +207,9 @@ TEST(mpfem_large_deformation, SmallLoadEqualsLinearAnalysis) {
         if (X.x() < 1e-12) p.prescribed.push_back({q, 0, 0.0}), p.prescribed.push_back({q, 1, 0.0});
         if (X.x() > 8.0 - 1e-12) tip.push_back(q);
       }
-      MpfemLoad load;
-      load.kind = MpfemLoad::Kind::traction;
-      load.particles = tip;
+      model::Load load;
+      load.kind = model::Load::Kind::traction;
+      load.select.nodes = tip;
       load.vector[1].constant = -1e-7;
       p.loads.push_back(load);
       p.options.large_deformation.increments = 1;

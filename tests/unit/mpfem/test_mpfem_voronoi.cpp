@@ -108,9 +108,9 @@ MpfemProblem patch(const ParticleLayout& layout, bool all_dirichlet, ParticleStr
   }
   if (!all_dirichlet) {
     auto traction = [&](const IndexList& particles, Real tx, Real ty) {
-      MpfemLoad load;
-      load.kind = MpfemLoad::Kind::traction;
-      load.particles = particles;
+      model::Load load;
+      load.kind = model::Load::Kind::traction;
+      load.select.nodes = particles;
       load.vector[0].constant = tx;
       load.vector[1].constant = ty;
       p.loads.push_back(load);
