@@ -148,16 +148,8 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
   } else {
     const auto& m = c.materials[0].spec;
     io::SourceLocation where{c.file, 0, 0, "materials.0"};
-    if (m.model == material::MaterialModel::neo_hookean) p.material = mpm::MpmProblem::Material::neo_hookean;
-    if (m.model == material::MaterialModel::j2_plasticity) {
-      p.material = mpm::MpmProblem::Material::j2_plasticity;
-      p.yield_stress = m.yield_stress;
-      p.hardening = m.hardening;
-    }
     if (!m.density || !(*m.density > 0)) problem_at(where, ".density", "a positive density (mpm is an explicit dynamic method)", "none");
-    p.young = m.E;
-    p.poisson = m.nu;
-    p.density = m.density.value_or(0.0);
+    p.material = m;
   }
   for (const auto& b : model.constraints) {
     model::Constraint k = b;

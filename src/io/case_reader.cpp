@@ -7,6 +7,7 @@
 #include <set>
 
 #include "geometry/generators.hpp"
+#include "material/material_registry.hpp"
 
 namespace lamina::io {
 
@@ -250,17 +251,16 @@ Case CaseReader::read() {
       MaterialEntry entry;
       entry.spec.name = m.string("name", fmt::format("material{}", index++));
       if (!names.insert(entry.spec.name).second) m.child("name").error("a unique material name", "'" + entry.spec.name + "' again");
-      const std::string model = m.word("model", {"linear_elastic", "neo_hookean", "j2_plasticity"}, "linear_elastic");
-      entry.spec.model = model == "neo_hookean"     ? material::MaterialModel::neo_hookean
-                         : model == "j2_plasticity" ? material::MaterialModel::j2_plasticity
-                                                    : material::MaterialModel::linear_elastic;
+      std::vector<std::string> model_names;
+      for (const auto& info : material::material_models()) model_names.push_back(info.name);
+      const material::MaterialModelInfo* info = material::find_material_model(m.word("model", model_names, model_names.front()));
+      if (!info) info = &material::material_models().front();  // the word's problem is reported
+      entry.spec.model = info->model;
       entry.spec.E = m.real("E", std::nullopt, 0.0, INFINITY, true);
       entry.spec.nu = m.real("nu", std::nullopt, -1.0, 0.5, true, true);
       if (m.has("density")) entry.spec.density = m.real("density", 1.0, 0.0, INFINITY, true);
-      if (entry.spec.model == material::MaterialModel::j2_plasticity) {
-        entry.spec.yield_stress = m.real("yield", std::nullopt, 0.0, INFINITY, true);
-        entry.spec.hardening = m.real("hardening", 0.0, 0.0);
-      }
+      for (const auto& k : info->constants)
+        entry.spec.constants[k.key] = m.real(k.key, k.fallback, k.lower, k.upper, k.lower_open, k.upper_open);
       if (m.has("where") && m.has("select")) m.error("either where or select, not both");
       if (m.has("where")) {
         NodeReader where = m.child("where");

@@ -1,6 +1,9 @@
 #pragma once
 // A material entry of the case file: constitutive model and its constants (PRODUCT.md section 3).
+// The models and the constants each reads are listed in material_registry.hpp.
+#include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "core/types.hpp"
@@ -16,11 +19,14 @@ struct MaterialSpec {
   Real E = 0.0;
   Real nu = 0.0;
   std::optional<Real> density;
-  Real yield_stress = 0.0;   // j2_plasticity
-  Real hardening = 0.0;      // j2_plasticity: linear isotropic hardening modulus
+  /// The model's further constants by key (e.g. j2_plasticity: yield, hardening), read and range-checked
+  /// against its MaterialModelInfo.
+  std::map<std::string, Real> constants;
 
   /// The elastic constants, whose moduli LinearElastic computes.
   LinearElastic elastic() const { return LinearElastic{E, nu}; }
+  /// A constant of the model (std::out_of_range if the entry has none of that key).
+  Real constant(const std::string& key) const { return constants.at(key); }
 };
 
 }  // namespace lamina::material

@@ -25,17 +25,16 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
     : problem_(std::move(problem)), probes_(std::move(probes)), grid_(Vec3::Zero(), 1.0) {
   const ShellMesh& mesh = problem_.mesh;
   const MpmOptions& o = problem_.options;
-  if (!(problem_.density > 0)) throw InputError("materials.0.density", "a positive density (mpm is a dynamic method)", "none or <= 0");
-  if (problem_.material == MpmProblem::Material::j2_plasticity && !(problem_.yield_stress > 0))
-    throw InputError("materials.0.yield", "a positive yield stress", fmt::format("{}", problem_.yield_stress));
+  const material::MaterialSpec& m = problem_.material;
+  if (!(m.density.value_or(0.0) > 0)) throw InputError("materials.0.density", "a positive density (mpm is a dynamic method)", "none or <= 0");
   for (std::size_t k = 0; k < probes_.size(); ++k)
-    if (probes_[k].field == "plastic_strain" && problem_.material != MpmProblem::Material::j2_plasticity)
+    if (probes_[k].field == "plastic_strain" && m.model != material::MaterialModel::j2_plasticity)
       throw InputError(fmt::format("probes.{}.field", k), "a field of this material (plastic_strain needs model: j2_plasticity)",
                        "plastic_strain");
   if (!(mesh.thickness > 0)) throw InputError("geometry.thickness", "a positive shell thickness", fmt::format("{}", mesh.thickness));
-  if (problem_.poisson <= -1.0 || problem_.poisson >= 0.5 || !(problem_.young > 0))
-    throw InputError("materials.0", "E > 0 and -1 < nu < 0.5", fmt::format("E = {}, nu = {}", problem_.young, problem_.poisson));
-  Cpdi2Domains domains(mesh, problem_.density);
+  if (m.nu <= -1.0 || m.nu >= 0.5 || !(m.E > 0))
+    throw InputError("materials.0", "E > 0 and -1 < nu < 0.5", fmt::format("E = {}, nu = {}", m.E, m.nu));
+  Cpdi2Domains domains(mesh, *m.density);
   if (!domains.defects().empty()) {
     std::vector<Diagnostic> problems;
     for (const auto& d : domains.defects()) {
@@ -68,13 +67,7 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   const Vec3 lower = mesh.nodes.rowwise().minCoeff();
   grid_ = BackgroundGrid(lower - Vec3::Constant(cell), cell);
 
-  if (problem_.material == MpmProblem::Material::neo_hookean)
-    material_ = std::make_unique<shell::NeoHookeanShellMaterial>(problem_.young, problem_.poisson, problem_.density);
-  else if (problem_.material == MpmProblem::Material::j2_plasticity)
-    material_ = std::make_unique<shell::J2PlasticShellMaterial>(problem_.young, problem_.poisson, problem_.density,
-                                                                problem_.yield_stress, problem_.hardening);
-  else
-    material_ = std::make_unique<shell::LinearElasticShellMaterial>(problem_.young, problem_.poisson, problem_.density);
+  material_ = material::make_shell_material(problem_.material);
   element_ = std::make_unique<shell::BelytschkoTsayShell>(problem_.section, *material_);
   wave_speed_ = material_->dilatational_wave_speed();
 

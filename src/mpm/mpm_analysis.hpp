@@ -136,7 +136,7 @@ class MpmAnalysis : public Analysis {
 
   MpmProblem problem_;
   std::vector<Probe> probes_;
-  std::unique_ptr<shell::ShellMaterial> material_;
+  std::unique_ptr<material::ShellMaterial> material_;
   std::unique_ptr<shell::BelytschkoTsayShell> element_;
   BackgroundGrid grid_;
 

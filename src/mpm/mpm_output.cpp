@@ -156,7 +156,7 @@ std::vector<std::string> MpmAnalysis::warnings() const {
                                 "or set shell.drilling: 0",
                                 held, rotation_free_.cols(), s.drilling));
   }
-  if (problem_.material != MpmProblem::Material::j2_plasticity) return out;
+  if (problem_.material.model != material::MaterialModel::j2_plasticity) return out;
   if (s.thickness_points <= 3)
     out.push_back(fmt::format("shell.thickness_points = {} with j2_plasticity: so few points cannot represent plastic "
                               "bending (3 Lobatto points carry at most the first-yield moment, a real section 1.5 x); use 7",

@@ -10,6 +10,7 @@
 #include "core/ramp.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
+#include "material/material_spec.hpp"
 #include "model/constraint.hpp"
 #include "model/load.hpp"
 #include "shell/belytschko_tsay_shell.hpp"
@@ -45,10 +46,9 @@ struct MpmOptions {
 
 struct MpmProblem {
   ShellMesh mesh;
-  enum class Material { linear_elastic, neo_hookean, j2_plasticity };
-  Material material = Material::linear_elastic;  // corotational linear elastic, neo-Hookean or J2 plane stress
-  Real young = 0.0, poisson = 0.0, density = 0.0;
-  Real yield_stress = 0.0, hardening = 0.0;      // j2_plasticity: sigma_y = yield_stress + hardening * eps_p
+  /// The case's material entry as read (a density is required); the plane-stress shell kernel comes from
+  /// material::make_shell_material (corotational linear elastic, neo-Hookean or J2).
+  material::MaterialSpec material;
   shell::ShellSection section;
   /// Velocity conditions at shell nodes (fix = zero velocity; a zero displacement is a fixed component),
   /// applied on the grid and at the nodes (eq (7)); ramps over the load factor (quasi-static) or t / end_time.

@@ -46,7 +46,7 @@ ThroughThicknessRule ThroughThicknessRule::lobatto(int n) {
   return r;
 }
 
-BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const ShellMaterial& material)
+BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const material::ShellMaterial& material)
     : section_(section), material_(material), rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
 
 bool BelytschkoTsayShell::corotational_frame(const NodeMatrix& x, Mat3& rotation) {
@@ -169,10 +169,10 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   for (int q = 0; q < nq; ++q) {
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * h;
     const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * h;
-    const Real rate[kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
+    const Real rate[material::kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
     Real* s = stress + stride * q;
-    Real old[kStressComponents];
-    std::copy(s, s + kStressComponents, old);
+    Real old[material::kStressComponents];
+    std::copy(s, s + material::kStressComponents, old);
     dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * material_.update(s, rate, dt);
     if (plastic) {
       const Real t0 = Ep * (rate[0] + nu * rate[1]) * dt, t1 = Ep * (rate[1] + nu * rate[0]) * dt, t2 = Gm * rate[2] * dt;

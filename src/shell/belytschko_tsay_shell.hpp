@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "core/types.hpp"
-#include "shell/shell_material.hpp"
+#include "material/shell_material.hpp"
 
 namespace lamina::shell {
 
@@ -88,11 +88,11 @@ struct ShellResultants {
 /// (stresses at the through-thickness points, hourglass resultants, thickness) is passed in.
 class BelytschkoTsayShell {
  public:
-  BelytschkoTsayShell(const ShellSection& section, const ShellMaterial& material);
+  BelytschkoTsayShell(const ShellSection& section, const material::ShellMaterial& material);
 
   int thickness_points() const { return static_cast<int>(rule_.points.size()); }
   /// Doubles per through-thickness point: 5 stresses and the material's history values.
-  int point_stride() const { return kStressComponents + material_.state_size(); }
+  int point_stride() const { return material::kStressComponents + material_.state_size(); }
   /// Doubles of stress state per element (point_stride() per through-thickness point).
   int stress_size() const { return point_stride() * thickness_points(); }
   /// Hourglass (stabilisation) resultants per element: bending x, bending y, transverse w (coefficient
@@ -138,7 +138,7 @@ class BelytschkoTsayShell {
                                     Real area, Real tangent_membrane, Real tangent_bending) const;
 
   ShellSection section_;
-  const ShellMaterial& material_;
+  const material::ShellMaterial& material_;
   ThroughThicknessRule rule_;
 };
 

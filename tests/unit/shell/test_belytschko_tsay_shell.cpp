@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "material/j2_plasticity.hpp"
 #include "shell/belytschko_tsay_shell.hpp"
 
 namespace lamina::shell {
@@ -24,7 +25,7 @@ NodeMatrix element(const Mat3& R, Real a, Real b, Real skew = 0.0, Real warp = 0
 
 struct Fixture {
   ShellSection section;
-  LinearElasticShellMaterial material{2.0e5, 0.3, 7.8e-3};
+  material::LinearElasticShellMaterial material{2.0e5, 0.3, 7.8e-3};
   Real h = 0.1;
 };
 
@@ -233,7 +234,7 @@ TEST(shell_BelytschkoTsay, StableTimeStepIsConservative) {
     f.section.kirchhoff_transverse_hourglass = kirchhoff;
     f.section.hourglass_membrane = r_mem;
     f.section.hourglass_bending = r_bend;
-    f.material = LinearElasticShellMaterial(2.0e5, nu, 7.8e-3);
+    f.material = material::LinearElasticShellMaterial(2.0e5, nu, 7.8e-3);
     BelytschkoTsayShell shell(f.section, f.material);
     const NodeMatrix x = element(some_rotation(), aspect, 1.0, aspect == 0.75 ? 0.0 : 0.2);
     Eigen::Matrix<Real, 24, 24> K;
@@ -384,7 +385,7 @@ TEST(shell_BelytschkoTsay, PhysicalStabilisationStoresTheClosedFormEnergies) {
 /// falls with the material's tangent; an elastic material keeps the full stiffness.
 TEST(shell_BelytschkoTsay, PhysicalStabilisationYieldsWithAPlasticMaterial) {
   const Real E = 2.0e5, nu = 0.3, rho = 7.8e-3, sy = 200.0, t = 0.1, a = 1.0, b = 0.5, A = 4 * a * b;
-  const J2PlasticShellMaterial steel(E, nu, rho, sy, 0.0);
+  const material::J2PlasticShellMaterial steel(E, nu, rho, sy, 0.0);
   ShellSection section;  // physical
   BelytschkoTsayShell shell(section, steel);
   const NodeMatrix x = element(Mat3::Identity(), 2 * a, 2 * b);

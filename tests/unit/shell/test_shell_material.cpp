@@ -7,7 +7,8 @@
 #include <cmath>
 #include <vector>
 
-#include "shell/shell_material.hpp"
+#include "material/j2_plasticity.hpp"
+#include "material/shell_material.hpp"
 
 namespace lamina::shell {
 namespace {
@@ -32,8 +33,8 @@ PrincipalState closed_form(Real l1, Real l2) {
 }
 
 /// Drive one point with a constant rate for n steps; returns the point data and the integrated d_zz.
-std::vector<Real> drive(const ShellMaterial& m, const Real rate[5], Real total_time, int steps, Real& log_thickness) {
-  std::vector<Real> point(static_cast<std::size_t>(kStressComponents + m.state_size()), 0.0);
+std::vector<Real> drive(const material::ShellMaterial& m, const Real rate[5], Real total_time, int steps, Real& log_thickness) {
+  std::vector<Real> point(static_cast<std::size_t>(material::kStressComponents + m.state_size()), 0.0);
   log_thickness = 0.0;
   const Real dt = total_time / steps;
   for (int k = 0; k < steps; ++k) log_thickness += dt * m.update(point.data(), rate, dt);
@@ -41,7 +42,7 @@ std::vector<Real> drive(const ShellMaterial& m, const Real rate[5], Real total_t
 }
 
 TEST(shell_NeoHookean, UniaxialInPlaneStretchMatchesClosedForm) {
-  const NeoHookeanShellMaterial m(kE, kNu, kRho);
+  const material::NeoHookeanShellMaterial m(kE, kNu, kRho);
   EXPECT_EQ(m.state_size(), 4);
   for (Real stretch : {1.5, 0.7}) {
     const Real rate[5] = {std::log(stretch), 0, 0, 0, 0};  // over unit time: H_xx = ln(stretch)
@@ -56,7 +57,7 @@ TEST(shell_NeoHookean, UniaxialInPlaneStretchMatchesClosedForm) {
 }
 
 TEST(shell_NeoHookean, RotatedPrincipalAxesMatchClosedForm) {
-  const NeoHookeanShellMaterial m(kE, kNu, kRho);
+  const material::NeoHookeanShellMaterial m(kE, kNu, kRho);
   const Real hxx = 0.3, hyy = -0.1, hxy = 0.2;  // logarithmic strain reached at t = 1
   const Real rate[5] = {hxx, hyy, 2 * hxy, 0, 0};
   Real log_thickness = 0;
@@ -72,26 +73,26 @@ TEST(shell_NeoHookean, RotatedPrincipalAxesMatchClosedForm) {
 }
 
 TEST(shell_NeoHookean, SmallStrainIsLinearElastic) {
-  const NeoHookeanShellMaterial hyper(kE, kNu, kRho);
-  const LinearElasticShellMaterial linear(kE, kNu, kRho);
+  const material::NeoHookeanShellMaterial hyper(kE, kNu, kRho);
+  const material::LinearElasticShellMaterial linear(kE, kNu, kRho);
   const Real rate[5] = {1e-6, -4e-7, 6e-7, 3e-7, -2e-7};
   Real t_hyper = 0, t_linear = 0;
   const auto a = drive(hyper, rate, 1.0, 10, t_hyper);
   const auto b = drive(linear, rate, 1.0, 10, t_linear);
-  for (int c = 0; c < kStressComponents; ++c) EXPECT_NEAR(a[c], b[c], 1e-5 * std::abs(b[0])) << c;
+  for (int c = 0; c < material::kStressComponents; ++c) EXPECT_NEAR(a[c], b[c], 1e-5 * std::abs(b[0])) << c;
   EXPECT_NEAR(t_hyper / t_linear, 1.0, 1e-5);
 }
 
 TEST(shell_NeoHookean, UnloadingReturnsToZeroStress) {
   // hyperelastic: the stress depends on the current strain only, not on the path
-  const NeoHookeanShellMaterial m(kE, kNu, kRho);
-  std::vector<Real> point(static_cast<std::size_t>(kStressComponents + m.state_size()), 0.0);
+  const material::NeoHookeanShellMaterial m(kE, kNu, kRho);
+  std::vector<Real> point(static_cast<std::size_t>(material::kStressComponents + m.state_size()), 0.0);
   const Real out[5] = {0.4, 0.1, 0.3, 0, 0}, back[5] = {-0.4, -0.1, -0.3, 0, 0};
   for (int k = 0; k < 50; ++k) m.update(point.data(), out, 0.02);
   EXPECT_GT(std::abs(point[0]), 1e3);
   for (int k = 0; k < 50; ++k) m.update(point.data(), back, 0.02);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(point[c], 0.0, 1e-6) << c;
-  EXPECT_NEAR(point[kStressComponents + 3], 0.0, 1e-12);  // ln lambda_3 back to zero
+  EXPECT_NEAR(point[material::kStressComponents + 3], 0.0, 1e-12);  // ln lambda_3 back to zero
 }
 
 // J2 plane-stress plasticity (Simo-Hughes return). Proportional paths with linear hardening are
@@ -103,7 +104,7 @@ Real von_mises(const std::vector<Real>& s) { return std::sqrt(s[0] * s[0] - s[0]
 TEST(shell_J2Plasticity, EquibiaxialStretchMatchesClosedForm) {
   // sigma_xx = sigma_yy = sigma: eps = sigma (1 - nu) / E + eps_p / 2, sigma = yield + H eps_p,
   // thickness strain -2 nu sigma / E - eps_p (plastic incompressibility)
-  const J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
+  const material::J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
   const Real rate[5] = {1, 1, 0, 0, 0};
   for (const Real eps : {0.5e-3, 5e-3, 2e-2}) {
     for (const int steps : {1, 7, 100}) {
@@ -114,7 +115,7 @@ TEST(shell_J2Plasticity, EquibiaxialStretchMatchesClosedForm) {
       const Real eps_p = elastic <= kYield ? 0.0 : (sigma - kYield) / kHardening;
       EXPECT_NEAR(p[0], sigma, 1e-10 * sigma) << eps << " " << steps;
       EXPECT_NEAR(p[1], sigma, 1e-10 * sigma);
-      EXPECT_NEAR(p[kStressComponents], eps_p, 1e-12 + 1e-10 * eps_p);
+      EXPECT_NEAR(p[material::kStressComponents], eps_p, 1e-12 + 1e-10 * eps_p);
       EXPECT_NEAR(thickness, -2 * kNu * sigma / kE - eps_p, 1e-12 + 1e-10 * eps);
     }
   }
@@ -122,7 +123,7 @@ TEST(shell_J2Plasticity, EquibiaxialStretchMatchesClosedForm) {
 
 TEST(shell_J2Plasticity, PureShearMatchesClosedForm) {
   // tau = (yield + H eps_p) / sqrt3, gamma = tau / G + sqrt3 eps_p; no thickness change
-  const J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
+  const material::J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
   const Real g = kE / (2 * (1 + kNu)), rate[5] = {0, 0, 1, 0, 0};
   for (const Real gamma : {1e-3, 1e-2, 5e-2}) {
     Real thickness = 0.0;
@@ -138,14 +139,14 @@ TEST(shell_J2Plasticity, PureShearMatchesClosedForm) {
 
 TEST(shell_J2Plasticity, StressStaysOnTheYieldSurfaceAndUnloadsElastically) {
   for (const Real hardening : {0.0, kHardening}) {
-    const J2PlasticShellMaterial m(kE, kNu, kRho, kYield, hardening);
-    std::vector<Real> p(static_cast<std::size_t>(kStressComponents + m.state_size()), 0.0);
+    const material::J2PlasticShellMaterial m(kE, kNu, kRho, kYield, hardening);
+    std::vector<Real> p(static_cast<std::size_t>(material::kStressComponents + m.state_size()), 0.0);
     Real previous_eps_p = 0.0;
     for (int k = 0; k < 400; ++k) {  // a non-proportional path: rotating in-plane strain rate
       const Real angle = 0.05 * k;
       const Real rate[5] = {std::cos(angle), 0.5 * std::sin(1.3 * angle), 0.8 * std::sin(angle), 0.1, -0.1};
       m.update(p.data(), rate, 2e-4);
-      const Real eps_p = p[kStressComponents], limit = kYield + hardening * eps_p;
+      const Real eps_p = p[material::kStressComponents], limit = kYield + hardening * eps_p;
       EXPECT_LE(von_mises(p), limit * (1 + 1e-12)) << k;
       if (eps_p > previous_eps_p) {
         EXPECT_NEAR(von_mises(p), limit, 1e-10 * limit) << k;
@@ -161,20 +162,20 @@ TEST(shell_J2Plasticity, StressStaysOnTheYieldSurfaceAndUnloadsElastically) {
                           -0.01 * before[2] / g, 0, 0};
     m.update(p.data(), back, 1.0);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(p[c], 0.99 * before[c], 1e-12 * kYield) << c;
-    EXPECT_EQ(p[kStressComponents], before[kStressComponents]);
+    EXPECT_EQ(p[material::kStressComponents], before[material::kStressComponents]);
   }
 }
 
 TEST(shell_J2Plasticity, BelowYieldEqualsLinearElastic) {
-  const J2PlasticShellMaterial plastic(kE, kNu, kRho, kYield, kHardening);
-  const LinearElasticShellMaterial linear(kE, kNu, kRho);
+  const material::J2PlasticShellMaterial plastic(kE, kNu, kRho, kYield, kHardening);
+  const material::LinearElasticShellMaterial linear(kE, kNu, kRho);
   const Real rate[5] = {3e-4, -1e-4, 2e-4, 1e-4, -2e-4};
   Real t_plastic = 0.0, t_linear = 0.0;
   const auto a = drive(plastic, rate, 1.0, 10, t_plastic);
   const auto b = drive(linear, rate, 1.0, 10, t_linear);
-  for (int c = 0; c < kStressComponents; ++c) EXPECT_NEAR(a[c], b[c], 1e-12 * kE) << c;
+  for (int c = 0; c < material::kStressComponents; ++c) EXPECT_NEAR(a[c], b[c], 1e-12 * kE) << c;
   EXPECT_NEAR(t_plastic, t_linear, 1e-15);
-  EXPECT_EQ(a[kStressComponents], 0.0);
+  EXPECT_EQ(a[material::kStressComponents], 0.0);
 }
 
 }  // namespace

@@ -24,7 +24,7 @@ struct StaticShellModel {
 };
 
 /// Assemble K from the element's internal force and solve K u = f on the free dofs.
-Eigen::VectorXd solve_static(const StaticShellModel& m, const ShellSection& section, const ShellMaterial& material,
+Eigen::VectorXd solve_static(const StaticShellModel& m, const ShellSection& section, const material::ShellMaterial& material,
                              Real thickness) {
   BelytschkoTsayShell element(section, material);
   const Index ndof = 6 * static_cast<Index>(m.nodes.size());
@@ -96,7 +96,7 @@ StaticShellModel structured(int nc, int na, const std::function<Vec3(Real, Real)
 /// per unit area, rigid diaphragms; quarter model. Returns u_z at mid-span of the free edge / 0.3024.
 Real scordelis_lo(int n, const ShellSection& section) {
   const Real R = 25, half_length = 25, phi = 40.0 * M_PI / 180.0, t = 0.25, q = 90;
-  LinearElasticShellMaterial material(4.32e8, 0.0, 1.0);
+  material::LinearElasticShellMaterial material(4.32e8, 0.0, 1.0);
   StaticShellModel m = structured(
       n, n, [&](Real s, Real a) { return Vec3(R * std::sin(phi * s), half_length * a, R * std::cos(phi * s)); },
       [](const Vec3& c) { return Vec3(c.x(), 0.0, c.z()); });
@@ -120,7 +120,7 @@ Real scordelis_lo(int n, const ShellSection& section) {
 /// P = 1 pinching loads; one-eighth model. Returns the radial deflection under the load / 1.8248e-5.
 Real pinched_cylinder(int n, const ShellSection& section) {
   const Real R = 300, half_length = 300, t = 3;
-  LinearElasticShellMaterial material(3.0e6, 0.3, 1.0);
+  material::LinearElasticShellMaterial material(3.0e6, 0.3, 1.0);
   // theta from 0 (load line, +z) to 90 deg (+x); y from 0 (mid-length, the load) to 300 (diaphragm)
   StaticShellModel m = structured(
       n, n, [&](Real s, Real a) { return Vec3(R * std::sin(0.5 * M_PI * s), half_length * a, R * std::cos(0.5 * M_PI * s)); },
@@ -168,7 +168,7 @@ TEST(shell_StaticBenchmarks, PinchedCylinderApproachesMacNealHarder) {
 /// unit tip load along the tip's width (in-plane) or its normal (out-of-plane); warped elements.
 /// Returns the tip displacement along the load / the reference.
 Real twisted_beam(int nl, int nw, Real t, bool in_plane, const ShellSection& section) {
-  LinearElasticShellMaterial material(29.0e6, 0.22, 1.0);
+  material::LinearElasticShellMaterial material(29.0e6, 0.22, 1.0);
   const Real L = 12.0, w = 1.1, P = t > 0.1 ? 1.0 : 1e-6;
   const Real reference = t > 0.1 ? (in_plane ? 5.424e-3 : 1.754e-3) : (in_plane ? 5.256e-3 : 1.294e-3);
   StaticShellModel m = structured(

@@ -6,8 +6,9 @@
 
 #include "core/types.hpp"
 #include "material/linear_elastic.hpp"
+#include "material/material_spec.hpp"
 
-namespace lamina::shell {
+namespace lamina::material {
 
 /// Local stress components at one through-thickness point: xx, yy, xy, yz, zx.
 constexpr int kStressComponents = 5;
@@ -32,7 +33,7 @@ class ShellMaterial {
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
   virtual Real density() const = 0;
-  Real shear_modulus() const { return material::LinearElastic{young_modulus(), poisson_ratio()}.mu(); }
+  Real shear_modulus() const { return LinearElastic{young_modulus(), poisson_ratio()}.mu(); }
   /// Plane-stress dilatational wave speed sqrt(E / (rho (1 - nu^2))) (shell stable step).
   Real plate_wave_speed() const;
   /// 3D dilatational wave speed sqrt((K + 4G/3) / rho) of seed 000 eq (40).
@@ -71,31 +72,8 @@ class NeoHookeanShellMaterial final : public ShellMaterial {
   Real young_, poisson_, density_, mu_, lambda_;
 };
 
-/// J2 (von Mises) plasticity in plane stress with linear isotropic hardening, hypoelastic in the
-/// corotational frame: sigma_y = yield + hardening * eps_p (eps_p the equivalent plastic strain, the one
-/// history value). Elastic trial C : d dt, then the closest-point return of Simo & Hughes (Computational
-/// Inelasticity, section 3.4, plane stress): with the trial stress in the common eigenbasis of C and P,
-/// xi_1 = (s_xx + s_yy)/sqrt2, xi_2 = (s_yy - s_xx)/sqrt2, xi_3 = s_xy, the returned stress is
-/// xi_1 / (1 + E dg / (3 (1 - nu))), xi_2,3 / (1 + 2 G dg), and dg solves sigma_vm(dg) = sigma_y(eps_p
-/// + 2/3 dg sigma_vm(dg)) (safeguarded Newton). Transverse shear stays elastic (G). The thickness rate
-/// is the elastic -nu/E (sigma_xx + sigma_yy)' plus the plastic -dg (sigma_xx + sigma_yy) / 3 (plastic
-/// incompressibility).
-class J2PlasticShellMaterial final : public ShellMaterial {
- public:
-  J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening);
-  Real update(Real* sigma, const Real* rate, Real dt) const override;
-  int state_size() const override { return 1; }
-  Real plastic_strain(const Real* point) const override { return point[kStressComponents]; }
-  bool is_plastic() const override { return true; }
-  Real stress_limit() const override { return yield_; }
-  Real young_modulus() const override { return young_; }
-  Real poisson_ratio() const override { return poisson_; }
-  Real density() const override { return density_; }
-  Real yield_stress() const { return yield_; }
-  Real hardening() const { return hardening_; }
+/// The plane-stress shell material of a case's material entry, by its model name (linear_elastic,
+/// neo_hookean, j2_plasticity; material_registry.hpp lists them with their constants).
+std::unique_ptr<ShellMaterial> make_shell_material(const MaterialSpec& spec);
 
- private:
-  Real young_, poisson_, density_, yield_, hardening_;
-};
-
-}  // namespace lamina::shell
+}  // namespace lamina::material

@@ -1,82 +1,30 @@
-#include "shell/shell_material.hpp"
+#include "material/j2_plasticity.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace lamina::shell {
+namespace lamina::material {
 
-Real ShellMaterial::plate_wave_speed() const {
-  const Real nu = poisson_ratio();
-  return std::sqrt(young_modulus() / (density() * (1.0 - nu * nu)));
+MaterialModelInfo j2_plasticity_model() {
+  MaterialModelInfo info;
+  info.model = MaterialModel::j2_plasticity;
+  info.name = "j2_plasticity";
+  info.description = "J2 plasticity, linear isotropic hardening: sigma_y = yield + hardening * eps_p (mpm shells)";
+  info.constants = {
+      {"yield", std::nullopt, 0.0, INFINITY, true, false, "initial yield stress"},
+      {"hardening", 0.0, 0.0, INFINITY, false, false, "linear isotropic hardening modulus"},
+  };
+  return info;
 }
 
-Real ShellMaterial::dilatational_wave_speed() const {
-  const material::LinearElastic elastic{young_modulus(), poisson_ratio()};
-  const Real bulk = elastic.bulk_modulus();
-  const Real shear = elastic.mu();
-  return std::sqrt((bulk + 4.0 * shear / 3.0) / density());
-}
-
-LinearElasticShellMaterial::LinearElasticShellMaterial(Real young, Real poisson, Real density)
-    : young_(young), poisson_(poisson), density_(density) {}
-
-Real LinearElasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
-  const material::LinearElastic elastic{young_, poisson_};
-  const Real c = elastic.plane_stress_modulus();
-  const Real g = elastic.mu();
-  sigma[0] += dt * c * (rate[0] + poisson_ * rate[1]);
-  sigma[1] += dt * c * (rate[1] + poisson_ * rate[0]);
-  sigma[2] += dt * g * rate[2];
-  sigma[3] += dt * g * rate[3];
-  sigma[4] += dt * g * rate[4];
-  return -poisson_ / (1.0 - poisson_) * (rate[0] + rate[1]);
-}
-
-NeoHookeanShellMaterial::NeoHookeanShellMaterial(Real young, Real poisson, Real density)
-    : young_(young),
-      poisson_(poisson),
-      density_(density),
-      mu_(material::LinearElastic{young, poisson}.mu()),
-      lambda_(material::LinearElastic{young, poisson}.lambda()) {}
-
-Real NeoHookeanShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
-  Real* state = sigma + kStressComponents;  // H_xx, H_yy, H_xy, ln lambda_3
-  state[0] += dt * rate[0];
-  state[1] += dt * rate[1];
-  state[2] += dt * 0.5 * rate[2];
-  // principal logarithmic strains and directions of H (2 x 2 symmetric)
-  const Real mean = 0.5 * (state[0] + state[1]), half_diff = 0.5 * (state[0] - state[1]);
-  const Real radius = std::hypot(half_diff, state[2]);
-  const Real e1 = mean + radius, e2 = mean - radius;
-  const Real cos2 = radius > 0.0 ? half_diff / radius : 1.0, sin2 = radius > 0.0 ? state[2] / radius : 0.0;
-  // ln lambda_3 from tau_zz = mu (lambda_3^2 - 1) + lambda (e1 + e2 + e3) = 0 (increasing in e3: Newton)
-  const Real e3_old = state[3];
-  Real e3 = e3_old;
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    const Real g = mu_ * (std::exp(2.0 * e3) - 1.0) + lambda_ * (e1 + e2 + e3);
-    const Real slope = 2.0 * mu_ * std::exp(2.0 * e3) + lambda_;
-    const Real step = g / slope;
-    e3 -= step;
-    if (std::abs(step) < 1e-15) break;
-  }
-  state[3] = e3;
-  const Real log_j = e1 + e2 + e3, j = std::exp(log_j);
-  const Real s1 = (mu_ * (std::exp(2.0 * e1) - 1.0) + lambda_ * log_j) / j;
-  const Real s2 = (mu_ * (std::exp(2.0 * e2) - 1.0) + lambda_ * log_j) / j;
-  const Real s_mean = 0.5 * (s1 + s2), s_half = 0.5 * (s1 - s2);
-  sigma[0] = s_mean + s_half * cos2;
-  sigma[1] = s_mean - s_half * cos2;
-  sigma[2] = s_half * sin2;
-  sigma[3] += dt * mu_ * rate[3];
-  sigma[4] += dt * mu_ * rate[4];
-  return dt > 0.0 ? (e3 - e3_old) / dt : 0.0;
-}
+J2PlasticShellMaterial::J2PlasticShellMaterial(const MaterialSpec& spec)
+    : J2PlasticShellMaterial(spec.E, spec.nu, spec.density.value_or(0.0), spec.constant("yield"), spec.constant("hardening")) {}
 
 J2PlasticShellMaterial::J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening)
     : young_(young), poisson_(poisson), density_(density), yield_(yield), hardening_(hardening) {}
 
 Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
-  const material::LinearElastic elastic{young_, poisson_};
+  const LinearElastic elastic{young_, poisson_};
   const Real E = young_, nu = poisson_, c = elastic.plane_stress_modulus(), g = elastic.mu();
   Real& eps_p = sigma[kStressComponents];
   const Real old_sum = sigma[0] + sigma[1];
@@ -133,4 +81,4 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
   return (-nu / E * (sxx + syy - old_sum) + plastic_zz) / dt;
 }
 
-}  // namespace lamina::shell
+}  // namespace lamina::material
