@@ -12,16 +12,28 @@ MaterialModelInfo j2_plasticity_model() {
   info.description = "J2 plasticity, linear isotropic hardening: sigma_y = yield + hardening * eps_p (mpm shells)";
   info.constants = {
       {"yield", std::nullopt, 0.0, INFINITY, true, false, "initial yield stress"},
-      {"hardening", 0.0, 0.0, INFINITY, false, false, "linear isotropic hardening modulus"},
+      {"hardening", 0.0, 0.0, INFINITY, false, false, "isotropic hardening modulus"},
+      {"hardening_exponent", 1.0, 0.0, 1.0, true, false, "n of sigma_y = yield + hardening eps_p^n (1: linear)"},
   };
   return info;
 }
 
 J2PlasticShellMaterial::J2PlasticShellMaterial(const MaterialSpec& spec)
-    : J2PlasticShellMaterial(spec.E, spec.nu, spec.density.value_or(0.0), spec.constant("yield"), spec.constant("hardening")) {}
+    : J2PlasticShellMaterial(spec.E, spec.nu, spec.density.value_or(0.0), spec.constant("yield"), spec.constant("hardening"),
+                             spec.constant("hardening_exponent")) {}
 
-J2PlasticShellMaterial::J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening)
-    : young_(young), poisson_(poisson), density_(density), yield_(yield), hardening_(hardening) {}
+J2PlasticShellMaterial::J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening, Real exponent)
+    : young_(young), poisson_(poisson), density_(density), yield_(yield), hardening_(hardening), exponent_(exponent) {}
+
+Real J2PlasticShellMaterial::flow_stress(Real eps_p) const {
+  return yield_ + hardening_ * (exponent_ == 1.0 ? eps_p : std::pow(std::max(eps_p, 0.0), exponent_));
+}
+
+Real J2PlasticShellMaterial::flow_slope(Real eps_p) const {
+  if (exponent_ == 1.0) return hardening_;
+  // infinite at eps_p = 0 for n < 1: the return's Newton then falls back to bisection inside its bracket
+  return eps_p > 0.0 ? hardening_ * exponent_ * std::pow(eps_p, exponent_ - 1.0) : INFINITY;
+}
 
 Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
   const LinearElastic elastic{young_, poisson_};
@@ -38,7 +50,7 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
   Real plastic_zz = 0.0;
   const Real trial_von_mises = von_mises(sxx, syy, sxy);
   // (a non-finite trial is left as it is: the analysis stops on the non-finite energy it causes)
-  if (std::isfinite(trial_von_mises) && trial_von_mises > yield_ + hardening_ * eps_p) {
+  if (std::isfinite(trial_von_mises) && trial_von_mises > flow_stress(eps_p)) {
     // return in the eigenbasis of C and P (seed-independent; Simo & Hughes 3.4)
     const Real xi1 = (sxx + syy) / std::sqrt(2.0), xi2 = (syy - sxx) / std::sqrt(2.0), xi3 = sxy;
     const Real k1 = E / (3.0 * (1.0 - nu)), k2 = 2.0 * g;
@@ -49,8 +61,9 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
       const Real vm = std::sqrt(3.0 * f2);
       const Real df2 = -2.0 * a * k1 / (d1 * d1 * d1) - 2.0 * b * k2 / (d2 * d2 * d2);
       const Real dvm = vm > 0.0 ? 1.5 * df2 / vm : 0.0;
-      slope = dvm - hardening_ * (2.0 / 3.0) * (vm + dg * dvm);
-      return vm - (yield_ + hardening_ * (eps_p + 2.0 / 3.0 * dg * vm));
+      const Real eps_new = eps_p + 2.0 / 3.0 * dg * vm;
+      slope = dvm - flow_slope(eps_new) * (2.0 / 3.0) * (vm + dg * dvm);
+      return vm - flow_stress(eps_new);
     };
     // bracket: residual(0) > 0 and residual decreases; grow hi until the sign changes
     Real lo = 0.0, hi = 1.0 / k2, slope = 0.0;

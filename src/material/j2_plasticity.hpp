@@ -1,5 +1,5 @@
 #pragma once
-// J2 (von Mises) plasticity in plane stress with linear isotropic hardening, hypoelastic in the
+// J2 (von Mises) plasticity in plane stress with isotropic (linear or power-law) hardening, hypoelastic in the
 // corotational frame of a shell (seed 000 section 2.3; Simo & Hughes, Computational Inelasticity, 3.4).
 #include "material/material_registry.hpp"
 #include "material/material_spec.hpp"
@@ -7,7 +7,7 @@
 
 namespace lamina::material {
 
-/// J2 (von Mises) plasticity in plane stress with linear isotropic hardening, hypoelastic in the
+/// J2 (von Mises) plasticity in plane stress with isotropic (linear or power-law) hardening, hypoelastic in the
 /// corotational frame: sigma_y = yield + hardening * eps_p (eps_p the equivalent plastic strain, the one
 /// history value). Elastic trial C : d dt, then the closest-point return of Simo & Hughes (Computational
 /// Inelasticity, section 3.4, plane stress): with the trial stress in the common eigenbasis of C and P,
@@ -18,8 +18,8 @@ namespace lamina::material {
 /// incompressibility).
 class J2PlasticShellMaterial final : public ShellMaterial {
  public:
-  J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening);
-  /// From a case's material entry: E, nu, density and the constants `yield` and `hardening`.
+  J2PlasticShellMaterial(Real young, Real poisson, Real density, Real yield, Real hardening, Real exponent = 1.0);
+  /// From a case's material entry: E, nu, density and the constants `yield`, `hardening`, `hardening_exponent`.
   explicit J2PlasticShellMaterial(const MaterialSpec& spec);
   Real update(Real* sigma, const Real* rate, Real dt) const override;
   int state_size() const override { return 1; }
@@ -31,12 +31,16 @@ class J2PlasticShellMaterial final : public ShellMaterial {
   Real density() const override { return density_; }
   Real yield_stress() const { return yield_; }
   Real hardening() const { return hardening_; }
+  Real hardening_exponent() const { return exponent_; }
+  /// sigma_y(eps_p) and its slope d sigma_y / d eps_p.
+  Real flow_stress(Real eps_p) const;
+  Real flow_slope(Real eps_p) const;
 
  private:
-  Real young_, poisson_, density_, yield_, hardening_;
+  Real young_, poisson_, density_, yield_, hardening_, exponent_;
 };
 
-/// The model's entry in the material registry: its name and constants (yield, hardening).
+/// The model's entry in the material registry: its name and constants (yield, hardening, hardening_exponent).
 MaterialModelInfo j2_plasticity_model();
 
 }  // namespace lamina::material
