@@ -121,6 +121,41 @@ TEST(shell_J2Plasticity, EquibiaxialStretchMatchesClosedForm) {
   }
 }
 
+TEST(shell_J2Plasticity, PowerLawHardeningEquibiaxialMatchesClosedForm) {
+  // sigma_y = yield + H eps_p^n: equibiaxial eps = sigma (1 - nu) / E + eps_p / 2 with sigma = sigma_y(eps_p),
+  // solved here for eps_p by bisection; thickness strain -2 nu sigma / E - eps_p
+  for (const Real n : {0.5, 0.2}) {
+    const material::J2PlasticShellMaterial m(kE, kNu, kRho, kYield, 10 * kHardening, n);
+    EXPECT_EQ(m.hardening_exponent(), n);
+    const Real rate[5] = {1, 1, 0, 0, 0};
+    for (const Real eps : {5e-3, 2e-2}) {
+      Real lo = 0.0, hi = 2.0 * eps;
+      for (int k = 0; k < 200; ++k) {
+        const Real mid = 0.5 * (lo + hi);
+        const Real f = (kYield + 10 * kHardening * std::pow(mid, n)) * (1 - kNu) / kE + 0.5 * mid - eps;
+        (f > 0 ? hi : lo) = mid;
+      }
+      const Real eps_p = 0.5 * (lo + hi), sigma = kYield + 10 * kHardening * std::pow(eps_p, n);
+      for (const int steps : {1, 50}) {
+        Real thickness = 0.0;
+        const auto p = drive(m, rate, eps, steps, thickness);
+        EXPECT_NEAR(p[0], sigma, 1e-9 * sigma) << n << " " << eps << " " << steps;
+        EXPECT_NEAR(p[1], sigma, 1e-9 * sigma);
+        EXPECT_NEAR(p[material::kStressComponents], eps_p, 1e-9 * eps_p);
+        EXPECT_NEAR(thickness, -2 * kNu * sigma / kE - eps_p, 1e-9 * eps);
+      }
+    }
+  }
+}
+
+TEST(shell_J2Plasticity, ExponentOneIsLinearHardening) {
+  const material::J2PlasticShellMaterial linear(kE, kNu, kRho, kYield, kHardening), power(kE, kNu, kRho, kYield, kHardening, 1.0);
+  const Real rate[5] = {1, -0.3, 0.4, 0, 0};
+  Real t1 = 0.0, t2 = 0.0;
+  EXPECT_EQ(drive(linear, rate, 2e-2, 9, t1), drive(power, rate, 2e-2, 9, t2));
+  for (const Real e : {0.0, 1e-3, 0.1}) EXPECT_EQ(power.flow_stress(e), kYield + kHardening * e);
+}
+
 TEST(shell_J2Plasticity, PureShearMatchesClosedForm) {
   // tau = (yield + H eps_p) / sqrt3, gamma = tau / G + sqrt3 eps_p; no thickness change
   const material::J2PlasticShellMaterial m(kE, kNu, kRho, kYield, kHardening);
