@@ -60,6 +60,14 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
   auto result = std::make_unique<MpmMethodOptions>();
   mpm::MpmOptions& o = result->options;
   read_shell_section(c, section, result->section);
+  io::NodeReader discretization(c.resolved["discretization"], "discretization", &section.sink());
+  if (discretization.defined() && discretization.is_map() && discretization.has("grid")) {
+    io::NodeReader grid = discretization.child("grid");
+    if (grid.expect_map()) {
+      o.grid_cell = grid.real("cell", std::nullopt, 0.0, INFINITY, true);
+      grid.reject_unknown_keys();
+    }
+  }
   bool kinetic_default = true;
   if (section.defined() && section.expect_map()) {
     const std::string analysis = section.word("analysis", {"quasi_static", "dynamic"}, "quasi_static");
@@ -139,7 +147,6 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
   p.mesh = *model.shell;
   p.options = mo.options;
   p.section = mo.section;
-  if (c.discretization.grid_cell) p.options.grid_cell = *c.discretization.grid_cell;
   const Real ramp_scale = p.options.analysis == mpm::MpmOptions::Kind::quasi_static ? 1.0 : p.options.end_time;
 
   if (c.materials.size() != 1) {
@@ -196,7 +203,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
 }  // namespace
 
 MethodEntry mpm_method_entry() {
-  return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true, {"shell"}},
+  return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true, {"shell"}, {"grid"}},
                      "CPDI2 material point method with Belytschko-Tsay shell domains, explicit / quasi-static (seed 000)",
                      read_mpm, create_mpm, {"mpm.end_time"}};
 }

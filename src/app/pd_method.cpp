@@ -32,6 +32,7 @@ struct PdMethodOptions : MethodOptions {
   pd::BucklingOptions buckling;
   ImperfectionOptions imperfection;
   bool check_zero_energy = true;
+  std::optional<Real> horizon, horizon_factor;  // discretization.horizon / horizon_factor
   /// surface_correction: plate puts the layers of a plate lattice at the Gauss points of the thickness.
   ModelRequest model_request() const override {
     return ModelRequest{false, body.surface_correction == pd::SurfaceCorrection::plate};
@@ -67,6 +68,12 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
   auto o = std::make_unique<PdMethodOptions>();
   io::NodeReader imperfection(c.resolved["imperfection"], "imperfection", &section.sink());
   read_imperfection(imperfection, o->imperfection);
+  io::NodeReader discretization(c.resolved["discretization"], "discretization", &section.sink());
+  if (discretization.defined() && discretization.is_map()) {
+    if (discretization.has("horizon")) o->horizon = discretization.real("horizon", 1.0, 0.0, INFINITY, true);
+    if (discretization.has("horizon_factor"))
+      o->horizon_factor = discretization.real("horizon_factor", 3.0, 0.0, INFINITY, true);
+  }
   if (!section.defined()) return o;
   if (!section.expect_map()) return o;
   const std::string analysis = section.word("analysis", {"quasi_static", "linear_static", "explicit", "buckling"}, "quasi_static");
@@ -200,8 +207,8 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   }
   const Vec3 spacing = model.cloud.spacing.cols() ? Vec3(model.cloud.spacing.col(0)) : *c.discretization.spacing;
   const bool planar = o.body.kinematics != pd::Kinematics::three_dimensional;
-  p.body.horizon = c.discretization.horizon ? *c.discretization.horizon
-                                            : c.discretization.horizon_factor.value_or(3.015) *
+  p.body.horizon = o.horizon ? *o.horizon
+                             : o.horizon_factor.value_or(3.015) *
                                                   (planar ? spacing.head<2>().maxCoeff() : spacing.maxCoeff());
   p.body.cell_size = planar ? std::sqrt(spacing.x() * spacing.y()) : std::cbrt(spacing.prod());
   if (planar && model.cloud.counts[2] > 1)
@@ -355,7 +362,7 @@ std::unique_ptr<Analysis> create_pd(const io::Case& c, const Model& model, const
 }  // namespace
 
 MethodEntry pd_method_entry() {
-  return MethodEntry{io::MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}},
+  return MethodEntry{io::MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}, {"horizon", "horizon_factor"}},
                      "Linearized state-based peridynamics: ADR quasi-static, explicit, linear, buckling (seed 002)",
                      read_pd, create_pd, {"pd.explicit.end_time"}};
 }

@@ -44,17 +44,18 @@ struct Jitter {
   unsigned seed = 1;
 };
 
+/// How the body is discretised: which generator builds the nodes (geometry/generators.hpp) and its
+/// sizes. A method's own parameters under `discretization:` (pd horizon, mpm grid) are read by the
+/// method (MethodKeys::own_discretization_keys); which keys a method accepts is its registry entry's.
 struct Discretization {
-  std::optional<std::array<int, 3>> nodes;       // efg, mls_fit
-  std::optional<std::string> nodes_file;         // CSV x,y,z
+  std::optional<std::array<int, 3>> nodes;       // a structured 3D point grid over the body
+  std::optional<std::string> nodes_file;         // points from a CSV x,y,z
   std::optional<std::vector<Vec3>> node_coordinates;  // nodes: {coordinates: [[x,y,z], ...]}
   std::optional<Jitter> jitter;
-  std::optional<Vec3> spacing;                   // pd
-  std::optional<Real> horizon, horizon_factor;   // pd
-  std::optional<std::array<int, 2>> elements;    // mpm
-  std::optional<Real> grid_cell;                 // mpm
-  std::optional<std::array<int, 2>> particles;   // mpfem
-  std::optional<std::string> particles_file;     // mpfem
+  std::optional<Vec3> spacing;                   // a cell-centred lattice of these cell sizes
+  std::optional<std::array<int, 2>> elements;    // a quadrilateral mesh of the mid-surface
+  std::optional<std::array<int, 2>> particles;   // a 2D particle grid (x-y)
+  std::optional<std::string> particles_file;     // 2D particles from a CSV x,y,z
 };
 
 struct OutputOptions {

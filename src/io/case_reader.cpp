@@ -452,8 +452,6 @@ Case CaseReader::read() {
       }
       disc.spacing = spacing;
     }
-    if (allowed("horizon") && d.has("horizon")) disc.horizon = d.real("horizon", 1.0, 0.0, INFINITY, true);
-    if (allowed("horizon_factor") && d.has("horizon_factor")) disc.horizon_factor = d.real("horizon_factor", 3.0, 0.0, INFINITY, true);
     if (allowed("elements") && d.has("elements")) {
       if (auto e = d.child("elements").as_integers(2)) {
         if ((*e)[0] < 1 || (*e)[1] < 1)
@@ -464,13 +462,7 @@ Case CaseReader::read() {
         disc.elements = std::array<int, 2>{static_cast<int>(std::max(1LL, (*e)[0])), static_cast<int>(std::max(1LL, (*e)[1]))};
       }
     }
-    if (allowed("grid") && d.has("grid")) {
-      NodeReader grid = d.child("grid");
-      if (grid.expect_map()) {
-        disc.grid_cell = grid.real("cell", std::nullopt, 0.0, INFINITY, true);
-        grid.reject_unknown_keys();
-      }
-    }
+    for (const auto& key : keys->own_discretization_keys) (void)d.child(key);  // read by the method
     if (allowed("particles") && d.has("particles")) {
       NodeReader p = d.child("particles");
       if (p.is_map()) {

@@ -19,6 +19,9 @@ struct MethodKeys {
   /// Top-level sections besides `<method>:` that belong to the method (pd: imperfection, mpm: shell);
   /// the reader leaves them to the method.
   std::vector<std::string> other_sections = {};
+  /// Keys under `discretization:` that are the method's own parameters (pd: horizon, mpm: grid); the
+  /// reader leaves them to the method, which reads them from the case's `discretization` node.
+  std::vector<std::string> own_discretization_keys = {};
 };
 
 /// Upper limit of the total node / particle / element count of a discretization (about 2 GB of

@@ -1,5 +1,5 @@
 // CaseReader (io/case_reader.hpp): no follow-on errors after an unknown method, the sections of a
-// method read by its own reader, the node-count limit, and cases built in code (OMLL decks).
+// method (and its own discretization keys) read by its own reader, the node-count limit, and cases built in code (OMLL decks).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -15,7 +15,7 @@ namespace {
 
 std::vector<MethodKeys> methods() {
   return {MethodKeys{"mls_fit", {"nodes", "jitter"}, false},
-          MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}}};
+          MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}, {"horizon", "horizon_factor"}}};
 }
 
 std::vector<Diagnostic> read_problems(const std::string& text, const std::vector<std::string>& overrides = {}) {
