@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "io/case_reader.hpp"
+#include "material/material_registry.hpp"
 
 namespace lamina::io {
 namespace {
@@ -95,6 +96,35 @@ TEST(io_case_reader, a_case_built_in_code_reports_recorded_positions) {
     EXPECT_EQ(e.diagnostics()[0].line, 12);
     EXPECT_EQ(e.diagnostics()[0].column, 20);
   }
+}
+
+// Every registered material model is accepted by name and gets each of its constants: the given value,
+// or the registry's default when the entry leaves it out.
+TEST(io_case_reader, material_constants_come_from_the_registry) {
+  for (const auto& info : material::material_models()) {
+    std::string entry = "{model: " + info.name + ", E: 1.0e4, nu: 0.25, density: 1";
+    for (const auto& k : info.constants)
+      if (!k.fallback) entry += ", " + k.key + ": 7.5";  // a required constant, within every range used
+    entry += "}";
+    std::string text = kPdCase;
+    text.replace(text.find("[{E: 1.0e4, nu: 0.25, density: 1}]"), 34, "[" + entry + "]");
+    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    const auto path = (std::filesystem::temp_directory_path() /
+                       ("lamina_case_reader_" + std::string(test->name()) + "_" + std::to_string(::getpid()) + ".yaml"))
+                          .string();
+    std::ofstream(path) << text;
+    CaseReader reader(path, {}, methods());
+    const Case c = reader.read();
+    reader.finish();
+    ASSERT_EQ(c.materials.size(), 1u);
+    const auto& spec = c.materials[0].spec;
+    EXPECT_EQ(spec.model, info.model) << info.name;
+    EXPECT_EQ(spec.constants.size(), info.constants.size()) << info.name;
+    for (const auto& k : info.constants) EXPECT_EQ(spec.constant(k.key), k.fallback.value_or(7.5)) << info.name << " " << k.key;
+  }
+  const auto* j2 = material::find_material_model("j2_plasticity");
+  ASSERT_NE(j2, nullptr);
+  EXPECT_EQ(material::find_material_model("no_such_model"), nullptr);
 }
 
 }  // namespace
