@@ -12,6 +12,7 @@
 #include "app/checkpointing.hpp"
 #include "app/model.hpp"
 #include "app/progress_line.hpp"
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/case_reader.hpp"
@@ -174,10 +175,6 @@ class RunSink : public OutputSink {
   Index sequence_ = 0, outputs_since_checkpoint_ = 0;
   std::chrono::steady_clock::time_point last_checkpoint_;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 

@@ -1,10 +1,10 @@
 #pragma once
 // StepStage: one named stage of a solver's step (as NairnMPM's tasks). A solver's step is an ordered
 // list of them, so the algorithm reads in one screen and a variant is another list; run_stages times each.
-#include <chrono>
 #include <functional>
 #include <vector>
 
+#include "core/stopwatch.hpp"
 #include "core/types.hpp"
 
 namespace lamina {
@@ -16,11 +16,10 @@ struct StepStage {
 
 /// Runs the stages in order, adding each one's wall time to seconds[k] (sized like stages).
 inline void run_stages(const std::vector<StepStage>& stages, std::vector<Real>& seconds) {
-  using Clock = std::chrono::steady_clock;
   for (std::size_t k = 0; k < stages.size(); ++k) {
     const auto start = Clock::now();
     stages[k].run();
-    seconds[k] += std::chrono::duration<Real>(Clock::now() - start).count();
+    seconds[k] += seconds_since(start);
   }
 }
 

@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "core/step_stage.hpp"
 #include "efg/collocation_system.hpp"
@@ -25,12 +26,10 @@ namespace lamina::efg {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 /// Boundary faces where a selection holds only in part are split into kSurfaceSplit^2 sub-faces.
 constexpr int kSurfaceSplit = 8;
 
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 
 std::string describe_point(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", x[0], x[1], x[2]); }

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "efg/background_quadrature.hpp"
 #include "efg/collocation_system.hpp"
 #include "efg/efg_analysis.hpp"
@@ -17,9 +18,6 @@
 namespace lamina::efg {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 /// Fraction of the way from a boundary node towards its face's centre at which a load's selection
 /// is tested: an edge node then belongs to a face's load only if the selection holds on that face

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "efg/efg_analysis.hpp"
 #include "efg/galerkin_assembly.hpp"
@@ -15,11 +16,6 @@
 #include "solve/block_pattern.hpp"
 
 namespace lamina::efg {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-}  // namespace
 
 void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   system_ = std::make_unique<GalerkinSystem>();

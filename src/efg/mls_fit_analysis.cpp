@@ -3,16 +3,13 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "geometry/expression.hpp"
 
 namespace lamina::efg {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // 4th-order central difference weights for the first derivative at offsets -2..2 (times 1/h).
 constexpr Real kFirst[5] = {1.0 / 12.0, -8.0 / 12.0, 0.0, 8.0 / 12.0, -1.0 / 12.0};

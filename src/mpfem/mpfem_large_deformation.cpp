@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "mpfem/dof_assembly.hpp"
 #include "mpfem/mpfem_analysis.hpp"
@@ -18,7 +19,6 @@ namespace lamina::mpfem {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 Eigen::Matrix2d deformation_gradient(const GradientList& list, const Eigen::VectorXd& u) {
   Eigen::Matrix2d F = Eigen::Matrix2d::Identity();

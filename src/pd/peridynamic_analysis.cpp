@@ -12,6 +12,7 @@
 #include <cmath>
 #include <optional>
 
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
@@ -20,8 +21,6 @@ namespace lamina::pd {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-Real seconds_since(Clock::time_point t) { return std::chrono::duration<Real>(Clock::now() - t).count(); }
 
 /// The free-free part of a symmetric matrix stored as its upper triangle (free dofs renumbered in order).
 solve::SparseMatrix reduce_upper(const solve::SparseMatrix& upper, const std::vector<Index>& map, Index free_count) {

@@ -6,16 +6,12 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "core/step_stage.hpp"
 #include "pd/peridynamic_analysis.hpp"
 
 namespace lamina::pd {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-Real seconds_since(Clock::time_point t) { return std::chrono::duration<Real>(Clock::now() - t).count(); }
-}  // namespace
 
 void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   const Index n = body_->nodes();

@@ -1,5 +1,7 @@
 #include "solve/sparse_linear_solver.hpp"
 
+#include "core/stopwatch.hpp"
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
@@ -58,10 +60,6 @@ void install_cholmod_allocators() {
     return true;
   }();
   (void)installed;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 /// CHOLMOD's supernodal LLT with access to the factor for the condition estimate.
