@@ -11,9 +11,12 @@ where loop time is the time of the time-step loop only (LAMMPS "Loop time"; lami
 `explicit_loop_s`), i.e. without reading the input or building the neighbour lists. lamina's loop
 also evaluates the strain and kinetic energy every step (LAMMPS: only at thermo output).
 Memory: lamina's peak resident memory divided by particles and by directed bonds (an upper bound:
-it includes the program, the case and the set-up).
+it includes the program, the case and the set-up), with the default bond storage (full at these sizes)
+and with `pd.bond_storage: lean` (the neighbour index only; LeanPeridynamicSolid), each with its loop
+time; `pd_lean_bytes_per_bond_besides_2kB_per_particle` = (peak - 2048 x particles) / bonds, the issue's
+measure (target below 32).
 
-Usage: bench/pd_lps_vs_lammps.py [--lamina build/lamina] [--n 51] [--steps 20] [--threads 1 2]
+Usage: bench/pd_lps_vs_lammps.py [--lamina build/lamina] [--n 51] [--steps 20] [--threads 1 2] [--no-lammps]
 Ends with one `BENCH <name> <value> <unit>` line per figure (ratios lamina / LAMMPS included).
 """
 import argparse
@@ -82,7 +85,7 @@ run {steps}
     return {"loop_s": float(m.group(1)), "atoms": int(m.group(4))}
 
 
-def run_lamina(lamina, n, steps, threads, workdir):
+def run_lamina(lamina, n, steps, threads, workdir, storage="auto"):
     """lamina explicit run on the same lattice, written with PRODUCT.md's case keys."""
     extent = n * SPACING  # nodes at cell centres: n cells of size a per direction
     dt = 1.0e-8
@@ -97,14 +100,15 @@ loads:
 pd:
   influence: one
   surface_correction: none
+  bond_storage: {storage}
   analysis: explicit
   explicit: {{end_time: {steps * dt}, time_step: {dt}, outputs: 1}}
 output: {{vtu: false}}
 """
-    path = os.path.join(workdir, f"lamina_{n}_{threads}.yaml")
+    path = os.path.join(workdir, f"lamina_{n}_{threads}_{storage}.yaml")
     with open(path, "w") as f:
         f.write(case)
-    out = os.path.join(workdir, f"lamina_{n}_{threads}")
+    out = os.path.join(workdir, f"lamina_{n}_{threads}_{storage}")
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     proc = subprocess.Popen([lamina, "run", path, "-o", out, "--quiet"], env=env)
     _, status, usage = os.wait4(proc.pid, 0)
@@ -124,8 +128,9 @@ def main():
     parser.add_argument("--n", type=int, default=51, help="particles per direction (51^3 = 132,651)")
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--no-lammps", action="store_true", help="lamina only (no ratios)")
     args = parser.parse_args()
-    if shutil.which("lmp") is None:
+    if not args.no_lammps and shutil.which("lmp") is None:
         sys.exit("lmp not found: scripts/install-deps.sh --peers")
     workdir = tempfile.mkdtemp(prefix="lamina_bench_lps_")
     bonds = directed_bonds(args.n)
@@ -133,20 +138,31 @@ def main():
           f"({bonds / args.n ** 3:.1f} per particle), {args.steps} steps", flush=True)
     bench = []
     for threads in args.threads:
-        lmp = run_lammps(args.n, args.steps, threads, workdir)
         lam = run_lamina(args.lamina, args.n, args.steps, threads, workdir)
-        if lmp["atoms"] != args.n ** 3 or lam["atoms"] != args.n ** 3:
-            print(f"  warning: particle counts LAMMPS {lmp['atoms']}, lamina {lam['atoms']}")
-        rate_lmp = bonds * args.steps / lmp["loop_s"]
+        lean = run_lamina(args.lamina, args.n, args.steps, threads, workdir, "lean")
         rate_lam = bonds * args.steps / lam["loop_s"]
-        print(f"  {threads} thread(s)/rank(s): LAMMPS {lmp['loop_s']:.3f} s ({rate_lmp:.3g} bond-updates/s), "
-              f"lamina {lam['loop_s']:.3f} s ({rate_lam:.3g} bond-updates/s), ratio {rate_lam / rate_lmp:.2f}",
-              flush=True)
-        bench += [(f"pd_lps_lammps_{threads}proc_bond_updates_per_s", rate_lmp, "bond_updates/s"),
-                  (f"pd_lps_lamina_{threads}thread_bond_updates_per_s", rate_lam, "bond_updates/s"),
-                  (f"pd_lps_speedup_lamina_over_lammps_{threads}", rate_lam / rate_lmp, "ratio")]
+        rate_lean = bonds * args.steps / lean["loop_s"]
+        line = (f"  {threads} thread(s): lamina {lam['loop_s']:.3f} s ({rate_lam:.3g} bond-updates/s, "
+                f"{lam['peak_bytes'] / bonds:.1f} B/bond peak), lean {lean['loop_s']:.3f} s ({rate_lean:.3g} bond-updates/s, "
+                f"{lean['peak_bytes'] / bonds:.1f} B/bond peak)")
+        bench += [(f"pd_lps_lamina_{threads}thread_bond_updates_per_s", rate_lam, "bond_updates/s"),
+                  (f"pd_lps_lamina_lean_{threads}thread_bond_updates_per_s", rate_lean, "bond_updates/s")]
+        if not args.no_lammps:
+            lmp = run_lammps(args.n, args.steps, threads, workdir)
+            if lmp["atoms"] != args.n ** 3 or lam["atoms"] != args.n ** 3:
+                print(f"  warning: particle counts LAMMPS {lmp['atoms']}, lamina {lam['atoms']}")
+            rate_lmp = bonds * args.steps / lmp["loop_s"]
+            line += f"; LAMMPS {lmp['loop_s']:.3f} s ({rate_lmp:.3g} bond-updates/s), ratio {rate_lam / rate_lmp:.2f}"
+            bench += [(f"pd_lps_lammps_{threads}proc_bond_updates_per_s", rate_lmp, "bond_updates/s"),
+                      (f"pd_lps_speedup_lamina_over_lammps_{threads}", rate_lam / rate_lmp, "ratio"),
+                      (f"pd_lps_speedup_lamina_lean_over_lammps_{threads}", rate_lean / rate_lmp, "ratio")]
+        print(line, flush=True)
         bench += [("pd_peak_memory_per_particle", lam["peak_bytes"] / lam["atoms"], "bytes"),
-                  ("pd_peak_memory_per_bond", lam["peak_bytes"] / bonds, "bytes")]
+                  ("pd_peak_memory_per_bond", lam["peak_bytes"] / bonds, "bytes"),
+                  ("pd_lean_peak_memory_per_particle", lean["peak_bytes"] / lean["atoms"], "bytes"),
+                  ("pd_lean_peak_memory_per_bond", lean["peak_bytes"] / bonds, "bytes"),
+                  ("pd_lean_bytes_per_bond_besides_2kB_per_particle",
+                   (lean["peak_bytes"] - 2048.0 * lean["atoms"]) / bonds, "bytes")]
     shutil.rmtree(workdir, ignore_errors=True)
     seen = set()
     for name, value, unit in bench:

@@ -1,5 +1,5 @@
 #pragma once
-// Memory hints for large, freshly allocated arrays.
+// Memory hints for large, freshly allocated arrays, and the machine's physical memory.
 //
 // On Linux with transparent huge pages in "madvise" mode (the Debian default), the first touch of a
 // large array faults it in 4 KiB pages, and on virtual machines each fault is expensive (about 10 us
@@ -12,5 +12,8 @@ namespace lamina {
 /// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with huge pages. Call
 /// before the memory is first written. A no-op for small arrays and on systems without madvise.
 void advise_huge_pages(void* data, std::size_t bytes);
+
+/// Physical memory of this machine in bytes (0 if unknown).
+std::size_t physical_memory_bytes();
 
 }  // namespace lamina

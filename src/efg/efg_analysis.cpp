@@ -11,9 +11,9 @@
 
 #include <fmt/format.h>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "core/step_stage.hpp"
+#include "core/stopwatch.hpp"
 #include "efg/collocation_system.hpp"
 #include "efg/galerkin_assembly.hpp"
 #include "efg/weighted_least_squares_system.hpp"

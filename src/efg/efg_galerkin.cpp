@@ -8,8 +8,8 @@
 #include <cmath>
 #include <iterator>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "efg/efg_analysis.hpp"
 #include "efg/galerkin_assembly.hpp"
 #include "efg/nodal_field.hpp"

@@ -3,8 +3,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "geometry/expression.hpp"
 
 namespace lamina::efg {

@@ -9,9 +9,9 @@
 #include <optional>
 #include <set>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "core/step_stage.hpp"
+#include "core/stopwatch.hpp"
 #include "mpfem/dof_assembly.hpp"
 #include "mpfem/gradient_list.hpp"
 #include "mpfem/strain_fit.hpp"

@@ -10,8 +10,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "mpfem/dof_assembly.hpp"
 #include "mpfem/mpfem_analysis.hpp"
 

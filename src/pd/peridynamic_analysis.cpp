@@ -12,15 +12,16 @@
 #include <cmath>
 #include <optional>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
+#include "core/memory.hpp"
+#include "core/stopwatch.hpp"
+#include "pd/lean_peridynamic_solid.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
 
 namespace lamina::pd {
 
 namespace {
-
 
 /// The free-free part of a symmetric matrix stored as its upper triangle (free dofs renumbered in order).
 solve::SparseMatrix reduce_upper(const solve::SparseMatrix& upper, const std::vector<Index>& map, Index free_count) {
@@ -154,9 +155,37 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
     plate_columns_ = &plate->columns();
     model_ = std::move(plate);
   } else {
-    body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, options);
-    model_ = std::make_unique<LinearPeridynamicSolid>(*body_);
+    BodyOptions body_options = options;
+    body_options.lean_bonds = lean_bond_storage();
+    body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, body_options);
+    if (body_->lean()) model_ = std::make_unique<LeanPeridynamicSolid>(*body_);
+    else model_ = std::make_unique<LinearPeridynamicSolid>(*body_);
   }
+}
+
+bool PeridynamicAnalysis::lean_bond_storage() const {
+  const BodyOptions& o = problem_.body;
+  if (o.surface_correction == SurfaceCorrection::plate) return false;
+  // lean needs no stiffness: explicit dynamics with a given time step (the critical step is not formed)
+  const bool stiffness_free = problem_.analysis == PdAnalysisKind::explicit_dynamics && problem_.explicit_options.time_step > 0;
+  if (o.bond_storage == BodyOptions::BondStorage::lean) {
+    if (!stiffness_free)
+      throw InputError("pd.bond_storage", "full or auto unless pd.analysis is explicit with pd.explicit.time_step given "
+                                          "(lean storage keeps no stiffness)", "lean");
+    return true;
+  }
+  if (o.bond_storage != BodyOptions::BondStorage::automatic || !stiffness_free) return false;
+  // automatic: lean when the full storage (about 200 bytes per bond: lengths, volumes, weights, moduli,
+  // reverse indices and the bond state) would take more than a quarter of this machine's memory; the
+  // lean kernel recomputes each bond's constants (about 2.5 x the time per step of the full one)
+  const Index n = problem_.volumes.size();
+  if (n == 0) return false;
+  const bool planar = o.kinematics != Kinematics::three_dimensional;
+  const Real h = o.cell_size > 0 ? o.cell_size : (planar ? 1.0 : std::cbrt(problem_.volumes.mean()));
+  const Real r = o.horizon / h;  // horizon in node spacings
+  const Real family = planar ? M_PI * r * r : 4.0 / 3.0 * M_PI * r * r * r;
+  const Real full_bytes = 200.0 * family * static_cast<Real>(n);
+  return full_bytes > 0.25 * static_cast<Real>(physical_memory_bytes());
 }
 
 Real PeridynamicAnalysis::ramp(int index, Real factor) const {

@@ -68,6 +68,8 @@ class PeridynamicAnalysis : public Analysis {
 
  private:
   void build_body(const PointMatrix& positions);
+  /// Whether the body keeps lean bond storage (BodyOptions::bond_storage resolved for this analysis).
+  bool lean_bond_storage() const;
   PointMatrix external_force(Real factor) const;
   void apply_prescribed(PointMatrix& u, Real factor, bool velocities) const;
   Real ramp(int index, Real factor) const;

@@ -73,6 +73,8 @@ PeridynamicBody::PeridynamicBody(PointMatrix positions, Eigen::VectorXd volumes,
     const Real v = volumes_.size() ? volumes_.mean() : 1.0;
     options_.cell_size = dimension() == 3 ? std::cbrt(v) : std::sqrt(v);  // 2D: volume per unit... refined below
   }
+  // lean storage serves the plain and energy-corrected lattices (the plate correction keeps fitted per-bond weights)
+  if (options_.surface_correction == SurfaceCorrection::plate) options_.lean_bonds = false;
   build_families();
   calibrate(young, poisson);
 }
@@ -127,6 +129,14 @@ void PeridynamicBody::build_families() {
   for (Index i = 0; i < n; ++i)
     family_start_[static_cast<std::size_t>(i) + 1] = family_start_[static_cast<std::size_t>(i)] + static_cast<Index>(families[static_cast<std::size_t>(i)].size());
   neighbour_.resize(static_cast<std::size_t>(family_start_.back()));
+  if (lean()) {  // the neighbour index only
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i) {
+      auto& family = families[static_cast<std::size_t>(i)];
+      std::copy(family.begin(), family.end(), neighbour_.begin() + first_bond(i));
+      std::vector<std::int32_t>().swap(family);
+    }
+  } else {
   reverse_.resize(neighbour_.size());
   length_.resize(static_cast<Index>(neighbour_.size()));
   bond_volume_.resize(length_.size());
@@ -149,6 +159,7 @@ void PeridynamicBody::build_families() {
       const auto it = std::lower_bound(other.begin(), other.end(), static_cast<std::int32_t>(i));
       reverse_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(first_bond(j) + (it - other.begin()));
     }
+  }
   }
   Real sum = 0, lo = INFINITY, hi = 0;
   for (Index i = 0; i < n; ++i) {
@@ -247,18 +258,19 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
   const Index n = nodes();
   const int dim = dimension();
   const int monomials = dim * (dim + 1) / 2;
-  weight_ = Matrix6X::Zero(6, bonds());
+  const bool lean_storage = lean();
+  if (lean_storage) {
+    node_weight_.assign(static_cast<std::size_t>(n), Mat3::Zero());
+    node_modulus_.assign(static_cast<std::size_t>(n), Vec6::Zero());
+  } else {
+    weight_ = Matrix6X::Zero(6, bonds());
+    modulus_.resize(bonds());
+  }
   coupling_.assign(static_cast<std::size_t>(n), Mat6::Zero());
-  modulus_.resize(bonds());
   kappa_.resize(n);
-  const Real delta = options_.horizon;
   const bool energy = options_.surface_correction == SurfaceCorrection::energy;
-  auto direction = [&](Index i, Index b) {
-    Vec3 xi = positions_.col(neighbour(b)) - positions_.col(i);
-    if (dim == 2) xi.z() = 0;
-    return Vec3(xi / length_[b]);
-  };
-  auto omega = [&](Index b) { return options_.influence == Influence::one ? 1.0 : delta / length_[b]; };
+  // the reference geometry of each bond, computed (the same values the full storage keeps)
+  auto geometry = [&](Index i, Index b) { return bond_geometry(i, neighbour(b)); };
   auto phi = [&](const Vec3& nv) {
     // element by element: assigning the fixed-size result to a dynamic vector drew a false
     // -Warray-bounds (a 4-wide AVX load of 3 values on a path the size check excludes) from GCC 12
@@ -280,8 +292,9 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
     Eigen::MatrixXd moment = Eigen::MatrixXd::Zero(dim, dim), gram = Eigen::MatrixXd::Zero(monomials, monomials);
     Real m = 0;
     for (Index b = first_bond(i); b < end_bond(i); ++b) {
-      const Vec3 nv = direction(i, b);
-      const Real s = omega(b) * length_[b] * length_[b] * bond_volume_[b];
+      const BondGeometry g = geometry(i, b);
+      const Vec3 nv = g.xi / g.length;
+      const Real s = g.influence * g.length * g.length * g.volume;
       m += s;
       Eigen::VectorXd n2(dim);
       for (int a = 0; a < dim; ++a) n2[a] = nv[a] * nv[a];
@@ -318,8 +331,8 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
   }
   statistics_.family_kinds = static_cast<Real>(representative.size());
   // Pass 3: bond weights and moduli.
-  Real max_dilatation_error = 0;
-#pragma omp parallel for schedule(static) reduction(max : max_dilatation_error)
+  Real max_dilatation_error = 0, modulus_sum = 0, modulus_min = INFINITY;
+#pragma omp parallel for schedule(static) reduction(max : max_dilatation_error) reduction(+ : modulus_sum) reduction(min : modulus_min)
   for (Index i = 0; i < n; ++i) {
     const Eigen::MatrixXd c = classical_stiffness(i);
     const Real mu = material::LinearElastic{young[i], poisson[i]}.mu();
@@ -338,25 +351,56 @@ void PeridynamicBody::calibrate(const Eigen::VectorXd& young, const Eigen::Vecto
     }
     coupling_[static_cast<std::size_t>(i)].topLeftCorner(dim, dim) = q;
     const Real lps_modulus = (dim == 3 ? 15.0 : 8.0) * mu / m;
+    if (lean_storage) {
+      node_weight_[static_cast<std::size_t>(i)].topLeftCorner(dim, dim) = d;
+      if (energy) node_modulus_[static_cast<std::size_t>(i)].head(monomials) = g;
+      else node_modulus_[static_cast<std::size_t>(i)][0] = lps_modulus;
+    }
+    // the weights and modulus of bond b (stored, or computed from the per-node constants)
+    auto bond_weight = [&](Index b, const BondGeometry& gb, const Vec3& nv) -> Vec3 {
+      if (lean_storage) return lean_weight(i, nv, gb.length, gb.influence);
+      return weight_.col(b).head<3>();
+    };
     for (Index b = first_bond(i); b < end_bond(i); ++b) {
-      const Vec3 nv = direction(i, b);
-      Eigen::VectorXd n2(dim);
-      for (int a = 0; a < dim; ++a) n2[a] = nv[a] * nv[a];
-      for (int a = 0; a < dim; ++a) weight_(a, b) = omega(b) * length_[b] * d.col(a).dot(n2);
-      modulus_[b] = energy ? omega(b) * g.dot(phi(nv)) : omega(b) * lps_modulus;
+      const BondGeometry gb = geometry(i, b);
+      const Vec3 nv = gb.xi / gb.length;
+      const Real c = lean_storage ? lean_modulus(i, nv, gb.influence)
+                                  : (energy ? gb.influence * g.dot(phi(nv)) : gb.influence * lps_modulus);
+      if (!lean_storage) {
+        Eigen::VectorXd n2(dim);
+        for (int a = 0; a < dim; ++a) n2[a] = nv[a] * nv[a];
+        for (int a = 0; a < dim; ++a) weight_(a, b) = gb.influence * gb.length * d.col(a).dot(n2);
+        modulus_[b] = c;
+      }
+      modulus_sum += c;
+      modulus_min = std::min(modulus_min, c);
     }
     for (int a = 0; a < dim; ++a) {
       Real theta = 0;
       for (Index b = first_bond(i); b < end_bond(i); ++b) {
-        const Vec3 nv = direction(i, b);
-        theta += weight_.col(b).head<3>().sum() * length_[b] * nv[a] * nv[a] * bond_volume_[b];
+        const BondGeometry gb = geometry(i, b);
+        const Vec3 nv = gb.xi / gb.length;
+        theta += bond_weight(b, gb, nv).sum() * gb.length * nv[a] * nv[a] * gb.volume;
       }
       max_dilatation_error = std::max(max_dilatation_error, std::abs(theta - 1.0));
     }
   }
   statistics_.max_dilatation_error = max_dilatation_error;
-  const Real mean = modulus_.size() ? modulus_.mean() : 1.0;
-  statistics_.min_bond_modulus_ratio = modulus_.size() ? modulus_.minCoeff() / mean : 1.0;
+  if (lean_storage) {
+    const Real mean = bonds() ? modulus_sum / static_cast<Real>(bonds()) : 1.0;
+    statistics_.min_bond_modulus_ratio = bonds() ? modulus_min / mean : 1.0;
+  } else {
+    const Real mean = modulus_.size() ? modulus_.mean() : 1.0;
+    statistics_.min_bond_modulus_ratio = modulus_.size() ? modulus_.minCoeff() / mean : 1.0;
+  }
+}
+
+Real PeridynamicBody::lean_modulus(Index i, const Vec3& n, Real omega) const {
+  const Vec6& g = node_modulus_[static_cast<std::size_t>(i)];
+  if (options_.surface_correction != SurfaceCorrection::energy) return omega * g[0];
+  if (dimension() == 3) return omega * g.dot(quartic_monomials<3>(n));
+  const auto q = quartic_monomials<2>(n);
+  return omega * (g[0] * q[0] + g[1] * q[1] + g[2] * q[2]);
 }
 
 namespace {

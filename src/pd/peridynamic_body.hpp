@@ -29,6 +29,7 @@
 // zig-zag w hourglass). Exact homogeneous energy of the plate law at every node; bending energy = sum
 // over the layers of V_k 1/2 eps(z_k) C eps(z_k) less the cross-layer share (exact lumping when the
 // layers sit at the Gauss points of the thickness, see geometry/cell_lattice.hpp).
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -56,6 +57,13 @@ struct BodyOptions {
   Real cell_size = 0.0;         // h of the partial-volume ramp (default: cube root of the node volume)
   PlateModel plate_model = PlateModel::automatic;
   Real plate_stabilization = 0.25;  // plate model: non-affine stabilisation modulus / shear modulus
+  /// pd.bond_storage: full (every bond's length, volume, weights, modulus and reverse index), lean (the
+  /// neighbour index only, 4 bytes; LeanPeridynamicSolid recomputes the rest from the positions and
+  /// per-node constants: explicit dynamics with a given time step, surface_correction none or energy),
+  /// automatic (lean exactly then). lean_bonds is the resolved choice (PeridynamicAnalysis::build_body).
+  enum class BondStorage { automatic, full, lean };
+  BondStorage bond_storage = BondStorage::automatic;
+  bool lean_bonds = false;
 };
 
 struct BodyStatistics {
@@ -84,6 +92,42 @@ class PeridynamicBody {
   Index end_bond(Index i) const { return family_start_[static_cast<std::size_t>(i) + 1]; }
   Index neighbour(Index b) const { return neighbour_[static_cast<std::size_t>(b)]; }
   Index reverse(Index b) const { return reverse_[static_cast<std::size_t>(b)]; }  // bond j -> i of bond i -> j
+  bool lean() const { return options_.lean_bonds; }
+
+  /// Reference geometry of bond i -> j (z dropped for plane kinematics), computed (both storage modes).
+  struct BondGeometry {
+    Vec3 xi;          // x_j - x_i
+    Real length;      // |xi|
+    Real influence;   // omega(|xi|)
+    Real volume;      // beta(|xi|) V_j (partial volume ramp)
+  };
+  BondGeometry bond_geometry(Index i, Index j) const {
+    BondGeometry g;
+    g.xi = positions_.col(j) - positions_.col(i);
+    if (options_.kinematics != Kinematics::three_dimensional) g.xi.z() = 0;
+    g.length = g.xi.norm();
+    g.influence = options_.influence == Influence::one ? 1.0 : options_.horizon / g.length;
+    Real beta = 1.0;
+    if (options_.partial_volume)
+      beta = std::clamp((options_.horizon + 0.5 * options_.cell_size - g.length) / options_.cell_size, 0.0, 1.0);
+    g.volume = beta * volumes_[j];
+    return g;
+  }
+  /// beta V_j of bond b of node i (stored, or computed with lean storage).
+  Real bond_volume_of(Index i, Index b) const {
+    return lean() ? bond_geometry(i, neighbour(b)).volume : bond_volume_[b];
+  }
+  /// Lean storage: the dilatation weights w^a_ij (a < 3) and the bond modulus c_ij of node i for a bond
+  /// of direction n, length x and influence omega (the calibrated per-node constants, see the header).
+  Vec3 lean_weight(Index i, const Vec3& n, Real x, Real omega) const {
+    const Vec3 n2 = n.cwiseProduct(n);
+    return omega * x * (node_weight_[static_cast<std::size_t>(i)].transpose() * n2);
+  }
+  /// w^0_ij alone (plain LPS uses one dilatation).
+  Real lean_weight_first(Index i, const Vec3& n, Real x, Real omega) const {
+    return omega * x * node_weight_[static_cast<std::size_t>(i)].col(0).dot(n.cwiseProduct(n));
+  }
+  Real lean_modulus(Index i, const Vec3& n, Real omega) const;
   const Eigen::VectorXd& bond_length() const { return length_; }
   const Eigen::VectorXd& bond_volume() const { return bond_volume_; }  // beta_ij V_j
   /// w^a_ij: column b holds the weights of the generalized dilatations theta_a: rows 0-2 the normal
@@ -111,6 +155,10 @@ class PeridynamicBody {
   Eigen::VectorXd length_, bond_volume_, modulus_, kappa_;
   Matrix6X weight_;
   std::vector<Mat6> coupling_;
+  // lean storage: column a of node_weight_ is d^a_i; node_modulus_ the quartic-monomial coefficients g_i
+  // (energy) or, in entry 0, the plain LPS modulus (15 or 8) mu / m_i (surface_correction none)
+  std::vector<Mat3> node_weight_;
+  std::vector<Vec6> node_modulus_;
   Eigen::VectorXd young_, poisson_;
   BodyStatistics statistics_;
 };

@@ -6,9 +6,9 @@
 #include <chrono>
 #include <cmath>
 
-#include "core/stopwatch.hpp"
 #include "core/error.hpp"
 #include "core/step_stage.hpp"
+#include "core/stopwatch.hpp"
 #include "pd/peridynamic_analysis.hpp"
 
 namespace lamina::pd {

@@ -46,8 +46,8 @@ Vec3 PeridynamicAnalysis::strain_gradient_at(Index i, Mat3& gradient) const {
       xi.z() = 0;
       du.z() = 0;
     }
-    shape += body_->bond_volume()[b] * xi * xi.transpose();
-    deformation += body_->bond_volume()[b] * du * xi.transpose();
+    shape += body_->bond_volume_of(i, b) * xi * xi.transpose();
+    deformation += body_->bond_volume_of(i, b) * du * xi.transpose();
   }
   if (planar) shape(2, 2) = 1.0;
   gradient = deformation * shape.inverse();

@@ -1,7 +1,5 @@
 #include "solve/sparse_linear_solver.hpp"
 
-#include "core/stopwatch.hpp"
-
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
@@ -17,6 +15,7 @@
 
 #include "core/error.hpp"
 #include "core/memory.hpp"
+#include "core/stopwatch.hpp"
 
 namespace lamina::solve {
 
