@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -148,11 +149,6 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
   return o;
 }
 
-Real evaluate(const geometry::ScalarField& f, const Vec3& x) {
-  if (f.is_constant()) return f.constant;
-  return geometry::Expression(f.expression).evaluate(x, 0.0);
-}
-
 PointMatrix read_imperfection_file(const std::string& path, const PointMatrix& nodes) {
   std::ifstream in(path);
   std::vector<std::array<Real, 6>> rows;
@@ -259,6 +255,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   };
   for (const auto& b : model.constraints) {
     const int ramp = ramp_index(b.ramp);
+    int step_ramp = -1;  // velocities default to a step (constant): one ramp for the whole condition
     bool any = false;
     for (int a = 0; a < 3; ++a) {
       const auto A = static_cast<std::size_t>(a);
@@ -268,25 +265,30 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
       }
       if (!b.fixed[A] && !b.displacement[A] && !b.velocity[A]) continue;
       any = true;
+      // the prescribed value's field, parsed once for all the nodes
+      std::optional<geometry::FieldEvaluator> value;
+      try {
+        if (b.velocity[A]) value.emplace(*b.velocity[A], 0.0);
+        else if (b.displacement[A]) value.emplace(*b.displacement[A], 0.0);
+      } catch (const geometry::ExpressionError& e) {
+        problem_at(b.location, ".displacement", "a valid expression of x, y, z", e.what());
+        continue;
+      }
+      if (b.velocity[A] && b.ramp.kind == Ramp::Kind::linear && step_ramp < 0) {
+        step_ramp = static_cast<int>(p.ramps.size());
+        p.ramps.push_back(Ramp{Ramp::Kind::step, {}});
+      }
       for (Index i : b.select.nodes) {
         PrescribedDof d;
         d.node = i;
         d.component = a;
         d.ramp = ramp;
-        try {
-          if (b.velocity[A]) {
-            d.velocity = true;
-            d.value = evaluate(*b.velocity[A], p.positions.col(i));
-            if (b.ramp.kind == Ramp::Kind::linear) {  // velocities default to a step (constant)
-              d.ramp = static_cast<int>(p.ramps.size());
-              p.ramps.push_back(Ramp{Ramp::Kind::step, {}});
-            }
-          } else if (b.displacement[A]) {
-            d.value = evaluate(*b.displacement[A], p.positions.col(i));
-          }
-        } catch (const geometry::ExpressionError& e) {
-          problem_at(b.location, ".displacement", "a valid expression of x, y, z", e.what());
-          break;
+        if (b.velocity[A]) {
+          d.velocity = true;
+          d.value = (*value)(p.positions.col(i));
+          if (b.ramp.kind == Ramp::Kind::linear) d.ramp = step_ramp;
+        } else if (value) {
+          d.value = (*value)(p.positions.col(i));
         }
         prescribe(d);
       }
@@ -299,26 +301,22 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
     const auto& nodes = l.select.nodes;
     const int ramp = ramp_index(l.ramp);
     try {
+      // the load's fields, parsed once for all the nodes
+      const geometry::FieldEvaluator fx(l.vector[0], 0.0), fy(l.vector[1], 0.0), fz(l.vector[2], 0.0);
+      auto vector_at = [&](Index i) {
+        const Vec3 x = p.positions.col(i);
+        return Vec3(fx(x), fy(x), fz(x));
+      };
       switch (l.kind) {
         case model::Load::Kind::force:
-          for (Index i : nodes) {
-            Vec3 f;
-            for (int a = 0; a < 3; ++a) f[a] = evaluate(l.vector[static_cast<std::size_t>(a)], p.positions.col(i));
-            p.forces.push_back(pd::NodalForce{i, f / static_cast<Real>(nodes.size()), ramp});
-          }
+          for (Index i : nodes) p.forces.push_back(pd::NodalForce{i, vector_at(i) / static_cast<Real>(nodes.size()), ramp});
           break;
         case model::Load::Kind::body_force:
-          for (Index i : nodes) {
-            Vec3 f;
-            for (int a = 0; a < 3; ++a) f[a] = evaluate(l.vector[static_cast<std::size_t>(a)], p.positions.col(i));
-            p.forces.push_back(pd::NodalForce{i, f * p.volumes[i], ramp});
-          }
+          for (Index i : nodes) p.forces.push_back(pd::NodalForce{i, vector_at(i) * p.volumes[i], ramp});
           break;
         case model::Load::Kind::initial_velocity:
           if (p.initial_velocity.cols() != n) p.initial_velocity = PointMatrix::Zero(3, n);
-          for (Index i : nodes)
-            for (int a = 0; a < 3; ++a)
-              p.initial_velocity(a, i) = evaluate(l.vector[static_cast<std::size_t>(a)], p.positions.col(i));
+          for (Index i : nodes) p.initial_velocity.col(i) = vector_at(i);
           break;
         default:
           problem_at(l.location, "", "force, body_force or initial_velocity (pd applies loads at nodes)",

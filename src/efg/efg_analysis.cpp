@@ -261,8 +261,8 @@ void EfgAnalysis::build_constraints() {
   for (std::size_t e = 0; e < problem_.constraints.size(); ++e) {
     const auto& c = problem_.constraints[e];
     if (!c.constrains(0) && !c.constrains(1) && !c.constrains(2)) continue;
-    std::array<std::unique_ptr<FieldEvaluator>, 3> value;
-    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(c.displacement_of(a));
+    std::array<std::unique_ptr<geometry::FieldEvaluator>, 3> value;
+    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<geometry::FieldEvaluator>(c.displacement_of(a), 1.0);
     auto prescribed = [&](const Vec3& x) {
       Vec3 v = Vec3::Zero();
       for (int a = 0; a < 3; ++a)
@@ -316,8 +316,8 @@ void EfgAnalysis::build_loads() {
   const Real tolerance = 1e-9 * (upper - lower).norm();
   for (std::size_t l = 0; l < problem_.loads.size(); ++l) {
     const auto& load = problem_.loads[l];
-    std::array<std::unique_ptr<FieldEvaluator>, 3> vec;
-    for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(load.vector[static_cast<std::size_t>(a)]);
+    std::array<std::unique_ptr<geometry::FieldEvaluator>, 3> vec;
+    for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<geometry::FieldEvaluator>(load.vector[static_cast<std::size_t>(a)], 1.0);
     auto vector_at = [&](const Vec3& x) {
       return Vec3((*vec[0])(x), (*vec[1])(x), (*vec[2])(x));
     };
@@ -340,7 +340,7 @@ void EfgAnalysis::build_loads() {
       }
       case model::Load::Kind::traction:
       case model::Load::Kind::pressure: {
-        FieldEvaluator pressure(load.scalar);
+        geometry::FieldEvaluator pressure(load.scalar, 1.0);
         bool any = false;
         if (test.can_select_surface()) {
           const SurfaceQuadrature part = refine_selected_faces(

@@ -87,8 +87,8 @@ std::vector<StrongFormPoint> EfgAnalysis::strong_form_nodes() const {
 
   // essential conditions at their selected nodes (a later condition overrides an earlier one per component)
   for (const auto& c : problem_.constraints) {
-    std::array<std::unique_ptr<FieldEvaluator>, 3> value;
-    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(c.displacement_of(a));
+    std::array<std::unique_ptr<geometry::FieldEvaluator>, 3> value;
+    for (int a = 0; a < 3; ++a) value[static_cast<std::size_t>(a)] = std::make_unique<geometry::FieldEvaluator>(c.displacement_of(a), 1.0);
     for (Index node : c.select.nodes) {
       StrongFormPoint& p = points[static_cast<std::size_t>(node)];
       for (int a = 0; a < 3; ++a)
@@ -102,9 +102,9 @@ std::vector<StrongFormPoint> EfgAnalysis::strong_form_nodes() const {
   // tractions on the faces of boundary nodes, body forces at all nodes
   for (const auto& load : problem_.loads) {
     RegionTest test(load.select, &map, nearest, tolerance);
-    std::array<std::unique_ptr<FieldEvaluator>, 3> vec;
-    for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(load.vector[static_cast<std::size_t>(a)]);
-    FieldEvaluator pressure(load.scalar);
+    std::array<std::unique_ptr<geometry::FieldEvaluator>, 3> vec;
+    for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<geometry::FieldEvaluator>(load.vector[static_cast<std::size_t>(a)], 1.0);
+    geometry::FieldEvaluator pressure(load.scalar, 1.0);
     bool any = false;
     for (Index i = 0; i < n; ++i) {
       StrongFormPoint& p = points[static_cast<std::size_t>(i)];
@@ -155,8 +155,8 @@ void EfgAnalysis::solve_strong_form(OutputSink* sink) {
       if (load.kind != model::Load::Kind::body_force) continue;
       RegionTest test(load.select, &cells_->map, [this](const Vec3& x) { return nearest_node(x); },
                       1e-9 * (upper - lower).norm());
-      std::array<std::unique_ptr<FieldEvaluator>, 3> vec;
-      for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<FieldEvaluator>(load.vector[static_cast<std::size_t>(a)]);
+      std::array<std::unique_ptr<geometry::FieldEvaluator>, 3> vec;
+      for (int a = 0; a < 3; ++a) vec[static_cast<std::size_t>(a)] = std::make_unique<geometry::FieldEvaluator>(load.vector[static_cast<std::size_t>(a)], 1.0);
       for (std::size_t i = static_cast<std::size_t>(n); i < points.size(); ++i)
         if (test.in_volume(points[i].x)) points[i].body_force += Vec3((*vec[0])(points[i].x), (*vec[1])(points[i].x), (*vec[2])(points[i].x));
     }

@@ -58,10 +58,5 @@ bool RegionTest::on_surface(const Vec3& x, int face) const {
 
 bool RegionTest::can_select_surface() const { return region_->spec.kind != geometry::SelectionSpec::Kind::nearest; }
 
-FieldEvaluator::FieldEvaluator(const geometry::ScalarField& field) : constant_(field.constant) {
-  if (!field.is_constant()) expression_ = std::make_unique<geometry::Expression>(field.expression);
-}
-
-Real FieldEvaluator::operator()(const Vec3& x) const { return expression_ ? expression_->evaluate(x, 1.0) : constant_; }
 
 }  // namespace lamina::efg

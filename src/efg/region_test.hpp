@@ -38,14 +38,5 @@ class RegionTest {
 };
 
 /// Value of a scalar field (constant or expression of x y z t) at a point, t = 1 (end of loading).
-class FieldEvaluator {
- public:
-  explicit FieldEvaluator(const geometry::ScalarField& field);
-  Real operator()(const Vec3& x) const;
-
- private:
-  Real constant_ = 0.0;
-  std::unique_ptr<geometry::Expression> expression_;
-};
 
 }  // namespace lamina::efg

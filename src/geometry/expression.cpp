@@ -75,4 +75,8 @@ Real Expression::evaluate(const Vec3& point, Real time) const {
   }
 }
 
+FieldEvaluator::FieldEvaluator(const ScalarField& field, Real t) : constant_(field.constant), t_(t) {
+  if (!field.is_constant()) expression_ = std::make_unique<Expression>(field.expression);
+}
+
 }  // namespace lamina::geometry

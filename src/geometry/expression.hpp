@@ -40,4 +40,15 @@ struct ScalarField {
   bool is_constant() const { return expression.empty(); }
 };
 
+/// A ScalarField parsed once and evaluated at many points at one time t (serial use: one per thread).
+class FieldEvaluator {
+ public:
+  FieldEvaluator(const ScalarField& field, Real t);
+  Real operator()(const Vec3& x) const { return expression_ ? expression_->evaluate(x, t_) : constant_; }
+
+ private:
+  Real constant_, t_;
+  std::unique_ptr<Expression> expression_;
+};
+
 }  // namespace lamina::geometry

@@ -37,18 +37,6 @@ ElementStrainOperator strain_operator(const ElementGradient& g) {
   return b;
 }
 
-/// Evaluates a constant-or-expression field (serial use only).
-class FieldEvaluator {
- public:
-  explicit FieldEvaluator(const geometry::ScalarField& f) : constant_(f.constant) {
-    if (!f.is_constant()) expression_.emplace(f.expression);
-  }
-  Real operator()(const Vec3& x) const { return expression_ ? expression_->evaluate(x, 1.0) : constant_; }
-
- private:
-  Real constant_;
-  std::optional<geometry::Expression> expression_;
-};
 
 }  // namespace
 
@@ -290,14 +278,14 @@ Eigen::VectorXd MpfemAnalysis::load_vector() const {
   for (const auto& load : problem_.loads) {
     std::set<Index> selected(load.select.nodes.begin(), load.select.nodes.end());
     if (load.kind == model::Load::Kind::force) {
-      const FieldEvaluator fx(load.vector[0]), fy(load.vector[1]);
+      const geometry::FieldEvaluator fx(load.vector[0], 1.0), fy(load.vector[1], 1.0);
       const Real share = 1.0 / static_cast<Real>(load.select.nodes.size());
       for (Index p : load.select.nodes) {
         f[2 * p] += share * fx(at3(x.col(p)));
         f[2 * p + 1] += share * fy(at3(x.col(p)));
       }
     } else if (load.kind == model::Load::Kind::body_force) {
-      const FieldEvaluator bx(load.vector[0]), by(load.vector[1]);
+      const geometry::FieldEvaluator bx(load.vector[0], 1.0), by(load.vector[1], 1.0);
       for (Index p : load.select.nodes) {
         const Real dv = thickness * discretization_.area_weight[p];
         f[2 * p] += dv * bx(at3(x.col(p)));
@@ -305,7 +293,7 @@ Eigen::VectorXd MpfemAnalysis::load_vector() const {
       }
     } else {
       const bool pressure = load.kind == model::Load::Kind::pressure;
-      const FieldEvaluator tx(load.vector[0]), ty(load.vector[1]), pr(load.scalar);
+      const geometry::FieldEvaluator tx(load.vector[0], 1.0), ty(load.vector[1], 1.0), pr(load.scalar, 1.0);
       auto traction = [&](const Vec2& p, const Vec2& normal) -> Vec2 {
         if (pressure) return -pr(at3(p)) * normal;
         return Vec2(tx(at3(p)), ty(at3(p)));

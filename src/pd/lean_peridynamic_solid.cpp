@@ -24,18 +24,32 @@ void LeanPeridynamicSolid::update(const PointMatrix& u, ModelState& state, bool 
 
 namespace {
 
-/// Extension e and deformed direction M of a bond of reference vector xi (length x) under the relative
-/// displacement du (exact, or linearised about the reference).
-inline void bond_kinematics(const Vec3& xi, Real x, const Vec3& du, bool linearised, Real& e, Vec3& m) {
+/// A bond i -> j in a configuration: its reference geometry and direction n, extension e and deformed
+/// direction M (exact, or linearised about the reference).
+struct BondKinematics {
+  PeridynamicBody::BondGeometry g;
+  Vec3 n;
+  Real e;
+  Vec3 m;
+};
+
+inline BondKinematics bond_kinematics(const PeridynamicBody& body, const PointMatrix& u, Index i, Index j, bool planar,
+                                      bool linearised) {
+  BondKinematics k;
+  k.g = body.bond_geometry(i, j);
+  Vec3 du = u.col(j) - u.col(i);
+  if (planar) du.z() = 0;
+  k.n = k.g.xi / k.g.length;
   if (linearised) {
-    m = xi / x;
-    e = m.dot(du);
+    k.m = k.n;
+    k.e = k.m.dot(du);
   } else {
-    const Vec3 y = xi + du;
+    const Vec3 y = k.g.xi + du;
     const Real length = y.norm();
-    m = y / length;
-    e = length - x;
+    k.m = y / length;
+    k.e = length - k.g.length;
   }
+  return k;
 }
 
 }  // namespace
@@ -49,16 +63,11 @@ void LeanPeridynamicSolid::update_kernel(LeanState& s) const {
   for (Index i = 0; i < body.nodes(); ++i) {
     VecK theta = VecK::Zero();
     Real energy = 0;
-    const Vec3 ui = s.u.col(i);
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
-      const Index j = body.neighbour(b);
-      const PeridynamicBody::BondGeometry g = body.bond_geometry(i, j);
-      Vec3 du = s.u.col(j) - ui;
-      if (planar) du.z() = 0;
-      Real e;
-      Vec3 m;
-      bond_kinematics(g.xi, g.length, du, s.linearised, e, m);
-      const Vec3 n = g.xi / g.length;
+      const BondKinematics k = bond_kinematics(body, s.u, i, body.neighbour(b), planar, s.linearised);
+      const auto& g = k.g;
+      const Vec3& n = k.n;
+      const Real e = k.e;
       if constexpr (K == 1) theta[0] += body.lean_weight_first(i, n, g.length, g.influence) * (e * g.volume);
       else theta += body.lean_weight(i, n, g.length, g.influence) * (e * g.volume);
       energy += body.lean_modulus(i, n, g.influence) * e * e * g.volume;
@@ -85,19 +94,15 @@ void LeanPeridynamicSolid::force_kernel(const LeanState& s, PointMatrix& f) cons
   const bool planar = body.dimension() == 2;
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < body.nodes(); ++i) {
-    const Vec3 ui = s.u.col(i);
     const VecK force_i = s.dilatation_force.col(i).template head<K>();
     Vec3 sum = Vec3::Zero();
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
       const Index j = body.neighbour(b);
-      const PeridynamicBody::BondGeometry g = body.bond_geometry(i, j);
-      Vec3 du = s.u.col(j) - ui;
-      if (planar) du.z() = 0;
-      Real e;
-      Vec3 m;
-      bond_kinematics(g.xi, g.length, du, s.linearised, e, m);
+      const BondKinematics k = bond_kinematics(body, s.u, i, j, planar, s.linearised);
+      const auto& g = k.g;
+      const Vec3& n = k.n;
+      const Real e = k.e;
       // both ends of the bond: the weights and modulus are even in the direction (n^2, n^4 monomials)
-      const Vec3 n = g.xi / g.length;
       Real tij, tji;
       if constexpr (K == 1) {
         tij = force_i[0] * body.lean_weight_first(i, n, g.length, g.influence) + body.lean_modulus(i, n, g.influence) * e;
@@ -106,7 +111,7 @@ void LeanPeridynamicSolid::force_kernel(const LeanState& s, PointMatrix& f) cons
         tij = force_i.dot(body.lean_weight(i, n, g.length, g.influence)) + body.lean_modulus(i, n, g.influence) * e;
         tji = s.dilatation_force.col(j).dot(body.lean_weight(j, n, g.length, g.influence)) + body.lean_modulus(j, n, g.influence) * e;
       }
-      sum += (body.volumes()[i] * g.volume * (tij + tji)) * m;
+      sum += (body.volumes()[i] * g.volume * (tij + tji)) * k.m;
     }
     f.col(i) = sum;
   }
