@@ -8,6 +8,7 @@
 #include "geometry/expression.hpp"
 #include "geometry/generators.hpp"
 #include "mpfem/mesh_boundary.hpp"
+#include "mpfem/particle_conditions.hpp"
 #include "mpfem/mpfem_analysis.hpp"
 #include "mpfem/plate_with_hole.hpp"
 
@@ -99,7 +100,7 @@ Model resolve_on(const io::Case& c, PointCloud cloud) {
 }
 
 Diagnostic at(const io::SourceLocation& where, const std::string& key, const std::string& expected, const std::string& found) {
-  return Diagnostic{where.file, where.line, where.column, where.key_path + key, expected, found};
+  return model::diagnostic_at(where, key, expected, found);
 }
 
 std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, const MethodOptions& options) {
@@ -270,36 +271,8 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
         break;
       }
 
-  // essential conditions on particle dofs
-  for (const auto& b : model->constraints) {
-    if (b.velocity[0] || b.velocity[1] || b.velocity[2]) {
-      problems.push_back(at(b.location, ".velocity", "fix, symmetry or displacement (velocity is for explicit methods)", "velocity"));
-      continue;
-    }
-    bool any = false;
-    for (int a = 0; a < 2; ++a) {
-      const bool fixed = b.fixed[static_cast<std::size_t>(a)];
-      const auto& value = b.displacement[static_cast<std::size_t>(a)];
-      if (!fixed && !value) continue;
-      any = true;
-      std::optional<geometry::Expression> expression;
-      if (value && !value->is_constant()) expression.emplace(value->expression);
-      for (Index q : b.select.nodes) {
-        PrescribedDof d;
-        d.node = q;
-        d.component = a;
-        if (value) d.value = expression ? expression->evaluate(model->cloud.point(q), 1.0) : value->constant;
-        if (!std::isfinite(d.value)) {
-          problems.push_back(at(b.location, ".displacement", "a finite prescribed displacement",
-                                fmt::format("{} at particle {}", d.value, q)));
-          break;
-        }
-        p.prescribed.push_back(d);
-      }
-    }
-    if (!any)
-      problems.push_back(at(b.location, ".fix", "x or y (mpfem is 2D: z and rotations are ignored)", "neither x nor y"));
-  }
+  // essential conditions on particle dofs, as the case states them (mpfem/particle_conditions.hpp)
+  p.prescribed = mpfem::prescribed_dofs(model->constraints, model->cloud.positions, problems);
 
   // loads
   for (const auto& l : model->loads) {

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "geometry/expression.hpp"
+#include "pd/nodal_conditions.hpp"
 #include "pd/peridynamic_analysis.hpp"
 
 namespace lamina::app {
@@ -189,7 +190,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   std::vector<Diagnostic> problems;
   auto problem_at = [&](const io::SourceLocation& where, const std::string& key, const std::string& expected,
                         const std::string& found) {
-    problems.push_back(Diagnostic{where.file, where.line, where.column, where.key_path + key, expected, found});
+    problems.push_back(model::diagnostic_at(where, key, expected, found));
   };
   const io::SourceLocation disc{c.file, c.discretization_location.line, c.discretization_location.column, "discretization"};
   const Index n = model.cloud.size();
@@ -208,8 +209,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   const Vec3 spacing = model.cloud.spacing.cols() ? Vec3(model.cloud.spacing.col(0)) : *c.discretization.spacing;
   const bool planar = o.body.kinematics != pd::Kinematics::three_dimensional;
   p.body.horizon = o.horizon ? *o.horizon
-                             : o.horizon_factor.value_or(3.015) *
-                                                  (planar ? spacing.head<2>().maxCoeff() : spacing.maxCoeff());
+                             : o.horizon_factor.value_or(3.015) * (planar ? spacing.head<2>().maxCoeff() : spacing.maxCoeff());
   p.body.cell_size = planar ? std::sqrt(spacing.x() * spacing.y()) : std::cbrt(spacing.prod());
   if (planar && model.cloud.counts[2] > 1)
     problem_at(disc, ".spacing", "one node layer through the thickness for plane kinematics (dz = thickness)",
@@ -235,97 +235,8 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   }
   if (!c.materials.empty() && p.young.hasNaN())
     problem_at(io::SourceLocation{c.file, 0, 0, "materials"}, "", "a material for every node", "nodes without one");
-  // Ramps.
-  auto ramp_index = [&](const Ramp& r) -> int {
-    if (r.kind == Ramp::Kind::linear) return -1;
-    p.ramps.push_back(r);
-    return static_cast<int>(p.ramps.size()) - 1;
-  };
-  // Boundary conditions (a later condition on the same dof replaces an earlier one).
-  std::map<Index, std::size_t> seen;
-  auto prescribe = [&](const PrescribedDof& d) {
-    const Index key = 3 * d.node + d.component;
-    auto it = seen.find(key);
-    if (it == seen.end()) {
-      seen[key] = p.prescribed.size();
-      p.prescribed.push_back(d);
-    } else {
-      p.prescribed[it->second] = d;
-    }
-  };
-  for (const auto& b : model.constraints) {
-    const int ramp = ramp_index(b.ramp);
-    int step_ramp = -1;  // velocities default to a step (constant): one ramp for the whole condition
-    bool any = false;
-    for (int a = 0; a < 3; ++a) {
-      const auto A = static_cast<std::size_t>(a);
-      if (b.velocity[A] && o.analysis != pd::PdAnalysisKind::explicit_dynamics) {
-        problem_at(b.location, ".velocity", "fix, symmetry or displacement (velocity needs pd.analysis: explicit)", "velocity");
-        continue;
-      }
-      if (!b.fixed[A] && !b.displacement[A] && !b.velocity[A]) continue;
-      any = true;
-      // the prescribed value's field, parsed once for all the nodes
-      std::optional<geometry::FieldEvaluator> value;
-      try {
-        if (b.velocity[A]) value.emplace(*b.velocity[A], 0.0);
-        else if (b.displacement[A]) value.emplace(*b.displacement[A], 0.0);
-      } catch (const geometry::ExpressionError& e) {
-        problem_at(b.location, ".displacement", "a valid expression of x, y, z", e.what());
-        continue;
-      }
-      if (b.velocity[A] && b.ramp.kind == Ramp::Kind::linear && step_ramp < 0) {
-        step_ramp = static_cast<int>(p.ramps.size());
-        p.ramps.push_back(Ramp{Ramp::Kind::step, {}});
-      }
-      for (Index i : b.select.nodes) {
-        PrescribedDof d;
-        d.node = i;
-        d.component = a;
-        d.ramp = ramp;
-        if (b.velocity[A]) {
-          d.velocity = true;
-          d.value = (*value)(p.positions.col(i));
-          if (b.ramp.kind == Ramp::Kind::linear) d.ramp = step_ramp;
-        } else if (value) {
-          d.value = (*value)(p.positions.col(i));
-        }
-        prescribe(d);
-      }
-    }
-    if (!any && (b.fixed[3] || b.fixed[4] || b.fixed[5]))
-      problem_at(b.location, ".fix", "translations x, y or z (peridynamic nodes have no rotations)", "only rotations");
-  }
-  // Loads.
-  for (const auto& l : model.loads) {
-    const auto& nodes = l.select.nodes;
-    const int ramp = ramp_index(l.ramp);
-    try {
-      // the load's fields, parsed once for all the nodes
-      const geometry::FieldEvaluator fx(l.vector[0], 0.0), fy(l.vector[1], 0.0), fz(l.vector[2], 0.0);
-      auto vector_at = [&](Index i) {
-        const Vec3 x = p.positions.col(i);
-        return Vec3(fx(x), fy(x), fz(x));
-      };
-      switch (l.kind) {
-        case model::Load::Kind::force:
-          for (Index i : nodes) p.forces.push_back(pd::NodalForce{i, vector_at(i) / static_cast<Real>(nodes.size()), ramp});
-          break;
-        case model::Load::Kind::body_force:
-          for (Index i : nodes) p.forces.push_back(pd::NodalForce{i, vector_at(i) * p.volumes[i], ramp});
-          break;
-        case model::Load::Kind::initial_velocity:
-          if (p.initial_velocity.cols() != n) p.initial_velocity = PointMatrix::Zero(3, n);
-          for (Index i : nodes) p.initial_velocity.col(i) = vector_at(i);
-          break;
-        default:
-          problem_at(l.location, "", "force, body_force or initial_velocity (pd applies loads at nodes)",
-                     "traction, pressure or mass");
-      }
-    } catch (const geometry::ExpressionError& e) {
-      problem_at(l.location, "", "a valid expression of x, y, z", e.what());
-    }
-  }
+  // Boundary conditions and loads, as the case states them (pd/nodal_conditions.hpp).
+  pd::apply_conditions(model.constraints, model.loads, p, problems);
   if (o.analysis == pd::PdAnalysisKind::linear_static || o.analysis == pd::PdAnalysisKind::buckling ||
       o.analysis == pd::PdAnalysisKind::quasi_static)
     if (p.prescribed.empty())

@@ -368,6 +368,8 @@ void EfgAnalysis::build_loads() {
         }
         break;
       }
+      default:  // moment, edge_moment, mass, initial_velocity: not efg loads (refused when the case is read)
+        break;
     }
   }
 }

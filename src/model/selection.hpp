@@ -3,6 +3,7 @@
 // and, once the model is built, the node (particle) indices it picked; with where it came from.
 #include <string>
 
+#include "core/error.hpp"
 #include "core/types.hpp"
 #include "geometry/selection.hpp"
 
@@ -14,6 +15,12 @@ struct SourceLocation {
   int line = 0, column = 0;
   std::string key_path;
 };
+
+/// A problem with the entry at `where` (key appended to its key path), for InputError.
+inline Diagnostic diagnostic_at(const SourceLocation& where, const std::string& key, const std::string& expected,
+                                const std::string& found) {
+  return Diagnostic{where.file, where.line, where.column, where.key_path + key, expected, found};
+}
 
 struct Selection {
   geometry::SelectionSpec spec;  // the geometric definition (kind all / where / box / set / nearest)
