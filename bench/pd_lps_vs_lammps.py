@@ -17,6 +17,7 @@ time; `pd_lean_bytes_per_bond_besides_2kB_per_particle` = (peak - 2048 x particl
 measure (target below 32).
 
 Usage: bench/pd_lps_vs_lammps.py [--lamina build/lamina] [--n 51] [--steps 20] [--threads 1 2] [--no-lammps]
+                                 [--storage both|auto|lean]
 Ends with one `BENCH <name> <value> <unit>` line per figure (ratios lamina / LAMMPS included).
 """
 import argparse
@@ -129,6 +130,9 @@ def main():
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--no-lammps", action="store_true", help="lamina only (no ratios)")
+    parser.add_argument("--storage", choices=["both", "auto", "lean"], default="both",
+                        help="lamina runs: the default storage and lean (both), or one of them (a 145^3 cube "
+                             "needs lean: the full storage would take about 59 GB)")
     args = parser.parse_args()
     if not args.no_lammps and shutil.which("lmp") is None:
         sys.exit("lmp not found: scripts/install-deps.sh --peers")
@@ -138,8 +142,10 @@ def main():
           f"({bonds / args.n ** 3:.1f} per particle), {args.steps} steps", flush=True)
     bench = []
     for threads in args.threads:
-        lam = run_lamina(args.lamina, args.n, args.steps, threads, workdir)
-        lean = run_lamina(args.lamina, args.n, args.steps, threads, workdir, "lean")
+        lam = run_lamina(args.lamina, args.n, args.steps, threads, workdir, "lean" if args.storage == "lean" else "auto")
+        lean = lam if args.storage == "lean" else run_lamina(args.lamina, args.n, args.steps, threads, workdir, "lean")
+        if args.storage == "auto":
+            lean = lam
         rate_lam = bonds * args.steps / lam["loop_s"]
         rate_lean = bonds * args.steps / lean["loop_s"]
         line = (f"  {threads} thread(s): lamina {lam['loop_s']:.3f} s ({rate_lam:.3g} bond-updates/s, "
