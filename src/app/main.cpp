@@ -16,6 +16,7 @@
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/omll_deck.hpp"
+#include "material/material_registry.hpp"
 
 namespace {
 
@@ -29,6 +30,13 @@ int info() {
                            lamina::version, lamina::build_type, omp_get_max_threads());
   std::cout << "methods:\n";
   for (const auto& m : lamina::app::methods()) std::cout << fmt::format("  {:<8} {}\n", m.keys.method, m.summary);
+  std::cout << "materials (E, nu, density and the constants listed):\n";
+  for (const auto& m : lamina::material::material_models()) {
+    std::string constants;
+    for (const auto& k : m.constants)
+      constants += fmt::format("{}{}{}", constants.empty() ? "" : ", ", k.key, k.fallback ? fmt::format(" = {:g}", *k.fallback) : "");
+    std::cout << fmt::format("  {:<15} {}{}\n", m.name, m.description, constants.empty() ? "" : " [" + constants + "]");
+  }
   std::cout << "features: yaml case files, --set overrides, VTU/PVD output, Gmsh .msh import, muParser expressions,\n"
                "          MLS shape functions (linear/quadratic, gauss/cubic/quartic spline, box/sphere/nearest/all/variable)\n";
   return 0;

@@ -9,7 +9,7 @@ MaterialModelInfo j2_plasticity_model() {
   MaterialModelInfo info;
   info.model = MaterialModel::j2_plasticity;
   info.name = "j2_plasticity";
-  info.description = "J2 plasticity, linear isotropic hardening: sigma_y = yield + hardening * eps_p (mpm shells)";
+  info.description = "J2 plasticity, isotropic hardening: sigma_y = yield + hardening * eps_p^n (mpm shells)";
   info.constants = {
       {"yield", std::nullopt, 0.0, INFINITY, true, false, "initial yield stress"},
       {"hardening", 0.0, 0.0, INFINITY, false, false, "isotropic hardening modulus"},
