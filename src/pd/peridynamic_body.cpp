@@ -137,29 +137,29 @@ void PeridynamicBody::build_families() {
       std::vector<std::int32_t>().swap(family);
     }
   } else {
-  reverse_.resize(neighbour_.size());
-  length_.resize(static_cast<Index>(neighbour_.size()));
-  bond_volume_.resize(length_.size());
-  const Real h = options_.cell_size;
+    reverse_.resize(neighbour_.size());
+    length_.resize(static_cast<Index>(neighbour_.size()));
+    bond_volume_.resize(length_.size());
+    const Real h = options_.cell_size;
 #pragma omp parallel for schedule(static)
-  for (Index i = 0; i < n; ++i) {
-    const auto& family = families[static_cast<std::size_t>(i)];
-    for (std::size_t k = 0; k < family.size(); ++k) {
-      const Index b = first_bond(i) + static_cast<Index>(k);
-      const Index j = family[k];
-      neighbour_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(j);
-      Vec3 xi = positions_.col(j) - positions_.col(i);
-      if (dim == 2) xi.z() = 0;
-      const Real x = xi.norm();
-      length_[b] = x;
-      Real beta = 1.0;
-      if (options_.partial_volume) beta = std::clamp((options_.horizon + 0.5 * h - x) / h, 0.0, 1.0);
-      bond_volume_[b] = beta * volumes_[j];
-      const auto& other = families[static_cast<std::size_t>(j)];
-      const auto it = std::lower_bound(other.begin(), other.end(), static_cast<std::int32_t>(i));
-      reverse_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(first_bond(j) + (it - other.begin()));
+    for (Index i = 0; i < n; ++i) {
+      const auto& family = families[static_cast<std::size_t>(i)];
+      for (std::size_t k = 0; k < family.size(); ++k) {
+        const Index b = first_bond(i) + static_cast<Index>(k);
+        const Index j = family[k];
+        neighbour_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(j);
+        Vec3 xi = positions_.col(j) - positions_.col(i);
+        if (dim == 2) xi.z() = 0;
+        const Real x = xi.norm();
+        length_[b] = x;
+        Real beta = 1.0;
+        if (options_.partial_volume) beta = std::clamp((options_.horizon + 0.5 * h - x) / h, 0.0, 1.0);
+        bond_volume_[b] = beta * volumes_[j];
+        const auto& other = families[static_cast<std::size_t>(j)];
+        const auto it = std::lower_bound(other.begin(), other.end(), static_cast<std::int32_t>(i));
+        reverse_[static_cast<std::size_t>(b)] = static_cast<std::int32_t>(first_bond(j) + (it - other.begin()));
+      }
     }
-  }
   }
   Real sum = 0, lo = INFINITY, hi = 0;
   for (Index i = 0; i < n; ++i) {
