@@ -1,5 +1,5 @@
 // lamina — meshfree and particle analysis of thin-walled structures. Command-line entry point:
-//   lamina run CASE.yaml [-o OUTDIR] [--threads N] [--set key.path=value ...] [--quiet]
+//   lamina run CASE.yaml [-o OUTDIR] [--threads N] [--set key.path=value ...] [--quiet] [--ranks N]
 //   lamina check CASE.yaml [--set ...]
 //   lamina convert DECK.omll                     (an OMLL macro deck as a lamina case, docs/omll.md)
 //   lamina validate [NAME ...] [-o DIR] [--fast]
@@ -8,6 +8,12 @@
 #include <fmt/format.h>
 #include <omp.h>
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
 
 #include "app/method_registry.hpp"
@@ -17,6 +23,7 @@
 #include "core/version.hpp"
 #include "io/omll_deck.hpp"
 #include "material/material_registry.hpp"
+#include "parallel/communicator.hpp"
 
 namespace {
 
@@ -42,9 +49,42 @@ int info() {
   return 0;
 }
 
+/// `lamina run ... --ranks N`: the same command on N processes under mpirun (which must be on the PATH);
+/// threads per rank: --threads, else the cores shared out. Returns only when mpirun cannot be started.
+int run_under_mpirun(int argc, char** argv, int ranks, int threads) {
+  std::vector<std::string> args{"mpirun", "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none"};
+  if (::geteuid() == 0) args.push_back("--allow-run-as-root");
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  args.push_back(ec ? std::string(argv[0]) : self.string());
+  bool threads_given = false;
+  for (int k = 1; k < argc; ++k) {
+    const std::string a = argv[k];
+    if (a == "--ranks") {
+      ++k;  // and its value
+      continue;
+    }
+    if (a.rfind("--ranks=", 0) == 0) continue;
+    if (a == "--threads" || a.rfind("--threads=", 0) == 0) threads_given = true;
+    args.push_back(a);
+  }
+  if (!threads_given) {
+    args.push_back("--threads");
+    args.push_back(std::to_string(std::max(1, threads > 0 ? threads : omp_get_num_procs() / ranks)));
+  }
+  std::vector<char*> raw;
+  for (auto& a : args) raw.push_back(a.data());
+  raw.push_back(nullptr);
+  ::execvp("mpirun", raw.data());
+  std::cerr << "error: --ranks: mpirun could not be started (install openmpi-bin): " << std::strerror(errno) << "\n";
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  lamina::parallel::Environment mpi(argc, argv);  // MPI only when started by mpirun
+  const auto& comm = lamina::parallel::Communicator::world();
   CLI::App cli{"lamina: meshfree and particle analysis of thin-walled structures"};
   cli.require_subcommand(1);
   cli.set_version_flag("--version", std::string(lamina::version));
@@ -58,6 +98,8 @@ int main(int argc, char** argv) {
   run->add_flag("--quiet", run_options.quiet, "no progress output");
   run->add_option("--restart", run_options.restart_directory,
                   "continue from the newest valid checkpoint in this result folder (docs/restart.md)");
+  int ranks = 1;
+  run->add_option("--ranks", ranks, "run on N MPI processes (starts mpirun; docs/scaling.md)")->check(CLI::PositiveNumber);
 
   std::string check_path;
   std::vector<std::string> check_overrides;
@@ -89,7 +131,13 @@ int main(int argc, char** argv) {
 
   try {
     if (*run) {
+      if (ranks > 1 && !comm.distributed()) return run_under_mpirun(argc, argv, ranks, run_options.threads);
+      if (ranks > 1 && comm.size() != ranks) {
+        std::cerr << "error: --ranks " << ranks << " inside an mpirun of " << comm.size() << " processes\n";
+        return 2;
+      }
       const auto result = lamina::app::run_case(run_options);
+      if (!comm.root()) return result.exit_code;  // rank 0 reports
       if (result.exit_code == 2) {
         std::cerr << "lamina run: invalid input, nothing was run\n";
         std::istringstream lines(result.error);

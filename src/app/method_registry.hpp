@@ -30,6 +30,8 @@ struct MethodEntry {
   /// Dotted case keys that may differ between a run and its restart (`--restart`), besides output:
   /// e.g. the end time of an explicit run, so that a finished run can be continued.
   std::vector<std::string> restart_keys = {};
+  /// Whether it runs on several MPI ranks (its analysis refuses, with InputError, what it cannot distribute).
+  bool distributed = false;
 };
 
 /// All methods compiled into this binary.

@@ -277,7 +277,7 @@ std::unique_ptr<Analysis> create_pd(const io::Case& c, const Model& model, const
 MethodEntry pd_method_entry() {
   return MethodEntry{io::MethodKeys{"pd", {"spacing", "horizon", "horizon_factor"}, true, {"imperfection"}, {"horizon", "horizon_factor"}},
                      "Linearized state-based peridynamics: ADR quasi-static, explicit, linear, buckling (seed 002)",
-                     read_pd, create_pd, {"pd.explicit.end_time"}};
+                     read_pd, create_pd, {"pd.explicit.end_time"}, /*distributed=*/true};
 }
 
 }  // namespace lamina::app

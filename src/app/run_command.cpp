@@ -19,6 +19,7 @@
 #include "io/checkpoint_file.hpp"
 #include "io/omll_deck.hpp"
 #include "io/result_set.hpp"
+#include "parallel/communicator.hpp"
 
 namespace lamina::app {
 
@@ -42,10 +43,12 @@ struct RunStopped {};
 /// Receives output points from the analysis: evaluates probes, appends history, writes VTU.
 class RunSink : public OutputSink {
  public:
-  RunSink(const Analysis& analysis, const io::Case& c, const Model& model, io::ResultSet& results, ProgressLine& progress,
-          const RunOptions& options, RunResult& result)
-      : analysis_(analysis), case_(c), model_(model), results_(results), progress_(progress), options_(options),
-        result_(result) {}
+  /// results: the result set on rank 0, null on the other ranks of a distributed run (which write their
+  /// VTU pieces into `staging`, rank 0's staging folder).
+  RunSink(const Analysis& analysis, const io::Case& c, const Model& model, io::ResultSet* results, std::filesystem::path staging,
+          ProgressLine& progress, const RunOptions& options, RunResult& result)
+      : analysis_(analysis), case_(c), model_(model), results_(results), staging_(std::move(staging)), progress_(progress),
+        options_(options), result_(result) {}
 
   void start() {
     result_.history_columns = {"step", "time", "load_factor"};
@@ -54,7 +57,7 @@ class RunSink : public OutputSink {
     std::vector<std::string> all = names_;
     all.insert(all.end(), builtin_names_.begin(), builtin_names_.end());
     result_.history_columns.insert(result_.history_columns.end(), all.begin(), all.end());
-    results_.begin_history(all);
+    if (results_) results_->begin_history(all);
   }
 
   void output_point(Index step, Real time, Real load_factor) override {
@@ -67,7 +70,7 @@ class RunSink : public OutputSink {
     }
     const auto builtin = analysis_.builtin_probes();
     for (const auto& name : builtin_names_) values.push_back(builtin.at(name));
-    results_.history_row(step, time, load_factor, values);
+    if (results_) results_->history_row(step, time, load_factor, values);
     std::vector<Real> row{static_cast<Real>(step), time, load_factor};
     row.insert(row.end(), values.begin(), values.end());
     result_.history_rows.push_back(row);
@@ -75,7 +78,13 @@ class RunSink : public OutputSink {
     const bool vtu = case_.output.vtu && (output_count_ % case_.output.every == 0);
     if (vtu || options_.keep_last_frame) {
       OutputFrame frame = analysis_.frame();
-      if (vtu) results_.write_frame(frame, time);
+      const auto& comm = parallel::Communicator::world();
+      if (vtu && !comm.distributed()) results_->write_frame(frame, time);
+      if (vtu && comm.distributed()) {  // one piece per rank, the .pvtu and .pvd on rank 0
+        if (results_) results_->write_parallel_frame(frame, time, comm.size());
+        else io::ResultSet::write_piece(staging_, frames_written_, comm.rank(), frame);
+        ++frames_written_;
+      }
       if (options_.keep_last_frame) result_.last_frame = std::move(frame);
     }
     ++output_count_;
@@ -121,12 +130,12 @@ class RunSink : public OutputSink {
     for (std::size_t r = 0; r < result_.history_rows.size(); ++r)
       for (Index k = 0; k < columns; ++k) history(k, static_cast<Index>(r)) = result_.history_rows[r][static_cast<std::size_t>(k)];
     out.put_matrix("run.history", history);
-    out.put("run.frame_times", results_.frame_times());
+    out.put("run.frame_times", results_->frame_times());
     out.put("run.last_values", last_values_);
     analysis_.save_state(out);
-    const auto file = results_.write_checkpoint(sequence_, out.bytes());
+    const auto file = results_->write_checkpoint(sequence_, out.bytes());
     const Index step = result_.history_rows.empty() ? 0 : static_cast<Index>(result_.history_rows.back().front());
-    results_.log(fmt::format("checkpoint {} written after output step {} ({} bytes)", file.filename().string(), step,
+    results_->log(fmt::format("checkpoint {} written after output step {} ({} bytes)", file.filename().string(), step,
                              out.bytes().size()));
     outputs_since_checkpoint_ = 0;
     last_checkpoint_ = std::chrono::steady_clock::now();
@@ -142,7 +151,7 @@ class RunSink : public OutputSink {
                                    result_.history_columns.size()));
     for (Index r = 0; r < history.cols(); ++r) {
       std::vector<Real> row(history.col(r).data(), history.col(r).data() + history.rows());
-      results_.history_row(static_cast<Index>(row[0]), row[1], row[2], std::vector<Real>(row.begin() + 3, row.end()));
+      results_->history_row(static_cast<Index>(row[0]), row[1], row[2], std::vector<Real>(row.begin() + 3, row.end()));
       result_.history_rows.push_back(std::move(row));
     }
     last_values_ = in.reals("run.last_values");
@@ -160,7 +169,9 @@ class RunSink : public OutputSink {
   const Analysis& analysis_;
   const io::Case& case_;
   const Model& model_;
-  io::ResultSet& results_;
+  io::ResultSet* results_;
+  std::filesystem::path staging_;
+  std::size_t frames_written_ = 0;
   ProgressLine& progress_;
   const RunOptions& options_;
   RunResult& result_;
@@ -233,6 +244,23 @@ RunResult run_case(const RunOptions& options) {
   }
   const io::Case& c = prepared.case_data;
   if (options.threads > 0) omp_set_num_threads(options.threads);
+  const auto& comm = parallel::Communicator::world();
+  if (comm.distributed() && !prepared.method->distributed) {
+    result.exit_code = 2;
+    result.error = locate(InputError("method", fmt::format("a method that runs on several ranks (pd) for a run on {} ranks; "
+                                                           "run this case on one process (without mpirun / --ranks)",
+                                                           comm.size()),
+                                     c.method),
+                          c)
+                       .what();
+    return result;
+  }
+  if (comm.distributed() && !options.restart_directory.empty()) {
+    result.exit_code = 2;
+    result.error = fmt::format("--restart: a run on one process (restarts of runs on {} ranks are not implemented yet)",
+                               comm.size());
+    return result;
+  }
 
   Model model;
   std::unique_ptr<Analysis> analysis;
@@ -297,29 +325,40 @@ RunResult run_case(const RunOptions& options) {
 
   result.output_directory = options.output_directory.empty() ? std::filesystem::path("out") / c.stem
                                                               : std::filesystem::path(options.output_directory);
-  io::ResultSet results(result.output_directory, !restart);
+  // the result set is rank 0's; the other ranks of a distributed run write their VTU pieces into its staging folder
+  std::unique_ptr<io::ResultSet> result_set;
+  if (comm.root()) result_set = std::make_unique<io::ResultSet>(result.output_directory, !restart);
+  const std::filesystem::path staging = comm.broadcast(result_set ? result_set->staging().string() : std::string());
+  struct RootLog {  // log lines and files: rank 0 only
+    io::ResultSet* set;
+    void log(const std::string& text) const {
+      if (set) set->log(text);
+    }
+  } results{result_set.get()};
   if (restart) {
-    results.adopt(checkpoint.file.parent_path(), checkpoint.state->reals("run.frame_times"));
-    results.remove_stale_staging();
+    result_set->adopt(checkpoint.file.parent_path(), checkpoint.state->reals("run.frame_times"));
+    result_set->remove_stale_staging();
   }
   std::ostringstream header;
-  header << fmt::format("lamina {} ({} build, {} threads)\ncase: {} ({})\nmethod: {}\nunits: {}\nnodes: {}\n", version,
-                        build_type, omp_get_max_threads(), c.file, c.title, c.method, c.units.empty() ? "(not given)" : c.units,
+  header << fmt::format("lamina {} ({} build, {} threads{})\ncase: {} ({})\nmethod: {}\nunits: {}\nnodes: {}\n", version,
+                        build_type, omp_get_max_threads(),
+                        comm.distributed() ? fmt::format(" per rank, {} MPI ranks", comm.size()) : std::string(), c.file, c.title, c.method, c.units.empty() ? "(not given)" : c.units,
                         model.cloud.size());
   results.log(header.str());
   if (restart) results.log(fmt::format("restarted from {}", checkpoint.file.string()));
   results.log("resolved case:\n" + resolved_yaml(c) + "\n");
   for (const auto& w : warnings) {
     results.log("WARNING: " + w);
-    if (!options.quiet) fmt::print(stderr, "lamina: warning: {}\n", w);
+    if (!options.quiet && comm.root()) fmt::print(stderr, "lamina: warning: {}\n", w);
   }
 
-  ProgressLine progress(options.quiet);
-  RunSink sink(*analysis, c, model, results, progress, options, result);
+  ProgressLine progress(options.quiet || !comm.root());
+  RunSink sink(*analysis, c, model, result_set.get(), staging, progress, options, result);
   nlohmann::json summary;
   summary["case"] = c.stem;
   summary["title"] = c.title;
   summary["method"] = c.method;
+  if (comm.distributed()) summary["ranks"] = comm.size();
   summary["lamina_version"] = version;
   if (!c.units.empty()) summary["units"] = c.units;
   if (!warnings.empty()) summary["warnings"] = warnings;
@@ -371,12 +410,17 @@ RunResult run_case(const RunOptions& options) {
   nlohmann::json timing = {{"setup_s", setup_seconds}, {"solve_s", seconds_since(run_start)}, {"total_s", seconds_since(start)}};
   for (const auto& [name, value] : analysis->timings()) timing["stage_" + name] = value;
   summary["timing"] = timing;
-  results.write_summary(summary);
+  comm.barrier();  // every rank's pieces are written before rank 0 moves the folder into place
+  if (!result_set) {
+    result.summary = summary;
+    return result;
+  }
+  result_set->write_summary(summary);
   results.log(result.exit_code == 0    ? "NORMAL TERMINATION"
               : result.exit_code >= 128 ? "INTERRUPTED: " + result.error
                                         : "ERROR TERMINATION: " + result.error);
   results.log(fmt::format("total time {:.3f} s", seconds_since(start)));
-  results.commit();
+  result_set->commit();
   result.summary = summary;
   return result;
 }

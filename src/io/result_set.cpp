@@ -78,6 +78,23 @@ void ResultSet::write_frame(const OutputFrame& frame, Real time) {
   write_pvd((staging_ / "result.pvd").string(), frames_);
 }
 
+void ResultSet::write_parallel_frame(const OutputFrame& own_piece, Real time, int ranks) {
+  const std::size_t k = frames_.size();
+  write_piece(staging_, k, 0, own_piece);
+  std::vector<std::string> pieces;
+  for (int r = 0; r < ranks; ++r) pieces.push_back(piece_name(k, r));
+  const std::string name = fmt::format("frame_{:05d}.pvtu", k);
+  write_pvtu((staging_ / name).string(), own_piece, pieces);
+  frames_.emplace_back(time, name);
+  write_pvd((staging_ / "result.pvd").string(), frames_);
+}
+
+void ResultSet::write_piece(const fs::path& staging, std::size_t k, int rank, const OutputFrame& piece) {
+  write_vtu((staging / piece_name(k, rank)).string(), piece);
+}
+
+std::string ResultSet::piece_name(std::size_t k, int rank) { return fmt::format("frame_{:05d}_p{:04d}.vtu", k, rank); }
+
 std::vector<Real> ResultSet::frame_times() const {
   std::vector<Real> times;
   for (const auto& [time, name] : frames_) times.push_back(time);

@@ -31,6 +31,12 @@ class ResultSet {
   void history_row(Index step, Real time, Real load_factor, const std::vector<Real>& probe_values);
   /// Writes frame_<k>.vtu and refreshes result.pvd.
   void write_frame(const OutputFrame& frame, Real time);
+  /// A frame of a run on `ranks` ranks: this rank's piece (frame_<k>_p<rank>.vtu, written by every rank
+  /// with write_piece) plus, on rank 0, frame_<k>.pvtu and result.pvd (call on rank 0 only).
+  void write_parallel_frame(const OutputFrame& own_piece, Real time, int ranks);
+  /// Writes rank `rank`'s piece of frame k into a staging folder (ranks other than 0).
+  static void write_piece(const std::filesystem::path& staging, std::size_t k, int rank, const OutputFrame& piece);
+  static std::string piece_name(std::size_t k, int rank);
   /// Times of the frames written so far (frame k is frame_<k>.vtu).
   std::vector<Real> frame_times() const;
   /// The file name of VTU frame k (frame_00000.vtu, ...).

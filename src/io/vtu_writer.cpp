@@ -97,6 +97,22 @@ void write_vtu(const std::string& path, const OutputFrame& frame) {
   if (!out) throw std::runtime_error("error while writing " + path);
 }
 
+void write_pvtu(const std::string& path, const OutputFrame& frame, const std::vector<std::string>& pieces) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << "<?xml version=\"1.0\"?>\n"
+         "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt32\">\n"
+         "  <PUnstructuredGrid GhostLevel=\"0\">\n    <PPointData>\n";
+  for (const auto& field : frame.point_fields)
+    out << fmt::format("      <PDataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\"/>\n", field.name,
+                       field.components);
+  out << "    </PPointData>\n    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
+         "    </PPoints>\n";
+  for (const auto& piece : pieces) out << fmt::format("    <Piece Source=\"{}\"/>\n", piece);
+  out << "  </PUnstructuredGrid>\n</VTKFile>\n";
+  if (!out) throw std::runtime_error("error while writing " + path);
+}
+
 void write_pvd(const std::string& path, const std::vector<std::pair<Real, std::string>>& entries) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);

@@ -10,6 +10,9 @@
 namespace lamina::io {
 
 void write_vtu(const std::string& path, const OutputFrame& frame);
+/// The parallel file (.pvtu) of a frame written as one piece per rank: `frame` gives the field names
+/// and sizes (any piece's), `pieces` the piece file names relative to the .pvtu.
+void write_pvtu(const std::string& path, const OutputFrame& frame, const std::vector<std::string>& pieces);
 /// entries: (time, vtu file name relative to the .pvd)
 void write_pvd(const std::string& path, const std::vector<std::pair<Real, std::string>>& entries);
 

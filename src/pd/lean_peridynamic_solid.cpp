@@ -17,7 +17,7 @@ void LeanPeridynamicSolid::update(const PointMatrix& u, ModelState& state, bool 
     s.dilatation = Eigen::Matrix3Xd::Zero(3, n);
     s.dilatation_force = Eigen::Matrix3Xd::Zero(3, n);
   }
-  s.bond_energy.resize(n);
+  if (s.bond_energy.size() != n) s.bond_energy = Eigen::VectorXd::Zero(n);
   if (components_ == 1) update_kernel<1>(s);
   else update_kernel<3>(s);
 }
@@ -61,6 +61,7 @@ void LeanPeridynamicSolid::update_kernel(LeanState& s) const {
   const bool planar = body.dimension() == 2;
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < body.nodes(); ++i) {
+    if (!body.computes_state(i)) continue;
     VecK theta = VecK::Zero();
     Real energy = 0;
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
@@ -94,6 +95,10 @@ void LeanPeridynamicSolid::force_kernel(const LeanState& s, PointMatrix& f) cons
   const bool planar = body.dimension() == 2;
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < body.nodes(); ++i) {
+    if (!body.owns(i)) {
+      f.col(i).setZero();
+      continue;
+    }
     const VecK force_i = s.dilatation_force.col(i).template head<K>();
     Vec3 sum = Vec3::Zero();
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
@@ -121,7 +126,8 @@ Real LeanPeridynamicSolid::strain_energy(const ModelState& state) const {
   const auto& s = static_cast<const LeanState&>(state);
   Real total = 0;
   for (Index i = 0; i < body_.nodes(); ++i)
-    total += body_.volumes()[i] *
+    if (body_.owns(i))
+      total += body_.volumes()[i] *
              (0.5 * s.dilatation.col(i).dot(s.dilatation_force.col(i)) + 0.5 * s.bond_energy[i]);
   return total;
 }

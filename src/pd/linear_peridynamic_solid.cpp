@@ -47,6 +47,15 @@ void LinearPeridynamicSolid::bond_state(const PointMatrix& u, BondState& s, bool
   s.dilatation_force.resize(6, n);
   s.pair_force.resize(body.bonds());
   // dilatation rows beyond the components in use stay zero (set once, when the state is new)
+  if (fresh && body.has_halo()) {  // the outer halo's bonds are never computed: zero, not garbage
+    s.direction.setZero();
+    s.length.setZero();
+    s.extension.setZero();
+    s.pair_force.setZero();
+    s.dilatation.setZero();
+    s.shear_dilatation.setZero();
+    s.dilatation_force.setZero();
+  }
   if (fresh && components_ < 6) {
     s.dilatation_force.setZero();
     s.shear_dilatation.setZero();
@@ -75,6 +84,7 @@ void LinearPeridynamicSolid::bond_state_kernel(const PointMatrix& u, BondState& 
   // Stage 1: extensions and dilatation (gather over each node's bonds).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
+    if (!body.computes_state(i)) continue;
     VecK theta = VecK::Zero();
     const Vec3 pi = body.positions().col(i), ui = u.col(i);
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
@@ -119,6 +129,7 @@ void LinearPeridynamicSolid::bond_state_kernel(const PointMatrix& u, BondState& 
   // Stage 2: pair forces P_ij = V_i beta V_j (t_ij + t_ji).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {
+    if (!body.owns(i)) continue;
     const VecK force_i = s.dilatation_force.col(i).template head<K>();
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) {
       const Index j = body.neighbour(b);
@@ -136,7 +147,8 @@ PointMatrix LinearPeridynamicSolid::internal_force(const BondState& s) const {
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < body.nodes(); ++i) {
     Vec3 sum = Vec3::Zero();
-    for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) sum += s.pair_force[b] * s.direction.col(b);
+    if (body.owns(i))
+      for (Index b = body.first_bond(i); b < body.end_bond(i); ++b) sum += s.pair_force[b] * s.direction.col(b);
     f.col(i) = sum;
   }
   return f;
@@ -147,6 +159,10 @@ Eigen::VectorXd LinearPeridynamicSolid::energy_density(const BondState& s) const
   Eigen::VectorXd w(body.nodes());
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < body.nodes(); ++i) {
+    if (!body.owns(i)) {
+      w[i] = 0;
+      continue;
+    }
     Real bond = 0;
     for (Index b = body.first_bond(i); b < body.end_bond(i); ++b)
       bond += body.bond_modulus()[b] * s.extension[b] * s.extension[b] * body.bond_volume()[b];

@@ -72,8 +72,9 @@ const std::vector<std::string> tensor_components{"xx", "yy", "zz", "xy", "yz", "
 
 }  // namespace
 
-PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes)
-    : problem_(std::move(problem)), probes_(std::move(probes)) {
+PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes,
+                                         const parallel::Communicator& comm)
+    : problem_(std::move(problem)), probes_(std::move(probes)), comm_(comm) {
   for (std::size_t k = 0; k < probes_.size(); ++k) {
     const Probe& p = probes_[k];
     const std::string where = fmt::format("probes.{}", k);
@@ -111,6 +112,14 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
     }
   }
   const auto start = Clock::now();
+  if (comm_.distributed()) {
+    check_distributable();
+    ranks_ = std::make_unique<RankNodes>();
+    problem_ = distribute_problem(problem_, comm_, *ranks_);
+    owned_dof_ = Eigen::VectorXd::Zero(3 * static_cast<Index>(ranks_->global.size()));
+    for (std::size_t k = 0; k < ranks_->global.size(); ++k)
+      if (ranks_->owns(static_cast<Index>(k))) owned_dof_.segment<3>(3 * static_cast<Index>(k)).setOnes();
+  }
   PointMatrix positions = problem_.positions;
   const auto& imperfection = problem_.imperfection;
   auto scaled = [&](const PointMatrix& shape) {
@@ -158,6 +167,7 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
     BodyOptions body_options = options;
     body_options.lean_bonds = lean_bond_storage();
     body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, body_options);
+    if (ranks_) body_->set_node_roles(ranks_->role);
     if (body_->lean()) model_ = std::make_unique<LeanPeridynamicSolid>(*body_);
     else model_ = std::make_unique<LinearPeridynamicSolid>(*body_);
   }
@@ -178,7 +188,7 @@ bool PeridynamicAnalysis::lean_bond_storage() const {
   // automatic: lean when the full storage (about 200 bytes per bond: lengths, volumes, weights, moduli,
   // reverse indices and the bond state) would take more than a quarter of this machine's memory; the
   // lean kernel recomputes each bond's constants (about 2.5 x the time per step of the full one)
-  const Index n = problem_.volumes.size();
+  const Index n = ranks_ ? ranks_->global_count : problem_.volumes.size();  // the same choice on every rank
   if (n == 0) return false;
   const bool planar = o.kinematics != Kinematics::three_dimensional;
   const Real h = o.cell_size > 0 ? o.cell_size : (planar ? 1.0 : std::cbrt(problem_.volumes.mean()));
@@ -186,6 +196,25 @@ bool PeridynamicAnalysis::lean_bond_storage() const {
   const Real family = planar ? M_PI * r * r : 4.0 / 3.0 * M_PI * r * r * r;
   const Real full_bytes = 200.0 * family * static_cast<Real>(n);
   return full_bytes > 0.25 * static_cast<Real>(physical_memory_bytes());
+}
+
+void PeridynamicAnalysis::check_distributable() const {
+  const std::string ranks = fmt::format("{} ranks", comm_.size());
+  if (problem_.analysis != PdAnalysisKind::explicit_dynamics) {
+    const char* kind = problem_.analysis == PdAnalysisKind::quasi_static ? "quasi_static"
+                       : problem_.analysis == PdAnalysisKind::buckling   ? "buckling"
+                                                                         : "linear_static";
+    throw InputError("pd.analysis", fmt::format("explicit on {} (linear_static, quasi_static and buckling run on one "
+                                                "process: start lamina without mpirun / --ranks)", ranks),
+                     kind);
+  }
+  const BodyOptions& o = problem_.body;
+  if (o.plate_model == PlateModel::automatic && o.kinematics == Kinematics::three_dimensional &&
+      o.surface_correction != SurfaceCorrection::plate && find_plate_columns(problem_.positions, problem_.volumes))
+    throw InputError("pd.plate_model",
+                     fmt::format("lattice on {} (this body is a plate lattice, whose director plate model runs on one "
+                                 "process)", ranks),
+                     "automatic");
 }
 
 Real PeridynamicAnalysis::ramp(int index, Real factor) const {

@@ -15,6 +15,9 @@
 //   stiffness_changes and stiffness_change_k_load / _ratio (k <= 3; pd/load_path_events.hpp),
 //   linear_buckling_load and first_buckling_ratio (imperfection: buckling_mode);
 //   explicit: kinetic_energy, strain_energy, external_work, energy_error; buckling: load_factor_k.
+// On several ranks (mpirun): explicit dynamics of the lattice model, each rank owning a part of the
+// nodes (pd/rank_nodes.hpp); probes, energies and counts are of the whole body on every rank, frames
+// hold the rank's own nodes (one VTU piece per rank).
 #include <map>
 #include <optional>
 #include <memory>
@@ -24,14 +27,19 @@
 #include "core/analysis.hpp"
 #include "pd/adaptive_dynamic_relaxation.hpp"
 #include "pd/linear_peridynamic_solid.hpp"
+#include "parallel/communicator.hpp"
 #include "pd/peridynamic_problem.hpp"
+#include "pd/rank_nodes.hpp"
 
 namespace lamina::pd {
 
 class PeridynamicAnalysis : public Analysis {
  public:
   /// Checks the probes (InputError for unsupported fields / components).
-  PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes);
+  /// On a communicator of several ranks (collective) the problem (the whole body, the same on every
+  /// rank) is partitioned; InputError for the analyses that run on one process only.
+  PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes,
+                      const parallel::Communicator& comm = parallel::Communicator::world());
 
   std::string method() const override { return "pd"; }
   void run(OutputSink& sink) override;
@@ -86,6 +94,12 @@ class PeridynamicAnalysis : public Analysis {
   /// Buckling load factors and modes of the current body under the reference load.
   void buckling_modes(int count);
   Index nearest_node(const Vec3& x, const IndexList& candidates) const;
+  /// A probe over this rank's nodes (all of them on one process); probe() combines the ranks'.
+  Real local_probe(const Probe& probe) const;
+  Real distributed_probe(const Probe& probe) const;
+  /// Refuses (InputError) what a distributed run does not do, before the partition.
+  void check_distributable() const;
+
   void update_energy();
 
   PeridynamicProblem problem_;
@@ -108,6 +122,9 @@ class PeridynamicAnalysis : public Analysis {
   std::map<std::string, Real> timings_;
   const PlateColumns* plate_columns_ = nullptr;  // the plate model's columns (owned by model_), else null
   std::string model_reason_;  // why a 3D body is not a plate lattice (the lattice model applies)
+  const parallel::Communicator& comm_;
+  std::unique_ptr<RankNodes> ranks_;  // several ranks: this rank's nodes; null on one process
+  Eigen::VectorXd owned_dof_;         // several ranks: 1 on the owned dofs, 0 on the halo's
 
   // The loop state between increments / steps (checkpointed with the fields above).
   bool resumed_ = false;  // restore_state was called: run() continues from it

@@ -43,6 +43,10 @@ enum class SurfaceCorrection { none, energy, plate };
 /// automatic: a 2-4 layer plate lattice (plate_columns.hpp) gets the director plate model
 /// (peridynamic_plate.hpp), any other body the lattice model; lattice: always the lattice model.
 enum class PlateModel { automatic, lattice };
+/// A node's part on one rank of a distributed run (pd/rank_nodes.hpp): its own, a halo node whose
+/// dilatation this rank computes (within one reach of an owned node), or a halo node that only
+/// completes those families.
+enum class NodeRole : std::int8_t { outer_halo = 0, inner_halo = 1, owned = 2 };
 
 using Vec6 = Eigen::Matrix<Real, 6, 1>;
 using Mat6 = Eigen::Matrix<Real, 6, 6>;
@@ -93,6 +97,12 @@ class PeridynamicBody {
   Index neighbour(Index b) const { return neighbour_[static_cast<std::size_t>(b)]; }
   Index reverse(Index b) const { return reverse_[static_cast<std::size_t>(b)]; }  // bond j -> i of bond i -> j
   bool lean() const { return options_.lean_bonds; }
+  /// Distributed runs: the role of each node on this rank. The models then compute dilatations for the
+  /// owned and inner-halo nodes only, and forces and energies for the owned ones. None set: all owned.
+  void set_node_roles(std::vector<NodeRole> roles) { roles_ = std::move(roles); }
+  bool computes_state(Index i) const { return roles_.empty() || roles_[static_cast<std::size_t>(i)] != NodeRole::outer_halo; }
+  bool owns(Index i) const { return roles_.empty() || roles_[static_cast<std::size_t>(i)] == NodeRole::owned; }
+  bool has_halo() const { return !roles_.empty(); }
 
   /// Reference geometry of bond i -> j (z dropped for plane kinematics), computed (both storage modes).
   struct BondGeometry {
@@ -161,6 +171,7 @@ class PeridynamicBody {
   std::vector<Vec6> node_modulus_;
   Eigen::VectorXd young_, poisson_;
   BodyStatistics statistics_;
+  std::vector<NodeRole> roles_;
 };
 
 }  // namespace lamina::pd

@@ -12,6 +12,7 @@
 namespace lamina::pd {
 
 bool PeridynamicAnalysis::can_checkpoint() const {
+  if (ranks_) return false;  // checkpoints of distributed runs: not yet (docs/scaling.md)
   return problem_.analysis == PdAnalysisKind::quasi_static || problem_.analysis == PdAnalysisKind::explicit_dynamics;
 }
 

@@ -21,7 +21,8 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   // Critical time step: Gershgorin bound of the largest eigenvalue of M^-1 K0. K0 reaches two
   // horizons (about 8 x family blocks per row); above ~2 GB it is not formed, and then the case
   // must give explicit.time_step (used unchecked), as with the lean bond storage, which keeps no stiffness.
-  const Real k0_bytes = 8.0 * static_cast<Real>(body_->bonds()) * 9.0 * 12.0;
+  // (several ranks: each forms the rows of its own nodes; the largest rank decides, the same on all)
+  const Real k0_bytes = comm_.max(8.0 * static_cast<Real>(body_->bonds()) * 9.0 * 12.0);
   Real dt = options.time_step;
   if (options.time_step <= 0 || (k0_bytes < 2.0e9 && !body_->lean())) {
     if (k0_bytes >= 2.0e9)
@@ -30,7 +31,9 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
           "time step (~{:.1f} GB); give pd.explicit.time_step", n, body_->bonds(), k0_bytes / 1e9));
     const solve::SparseMatrix k0 = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
     const Eigen::VectorXd rows = absolute_row_sums(k0);
-    const Real omega_max = std::sqrt((rows.array() / mass.array()).maxCoeff());
+    // the halo's rows are incomplete: the owned dofs' only (owned_dof_ is 1 there, 0 on the halo)
+    const Real omega_max = std::sqrt(ranks_ ? comm_.max((rows.array() / mass.array() * owned_dof_.array()).maxCoeff())
+                                            : (rows.array() / mass.array()).maxCoeff());
     const Real critical = 2.0 / omega_max;
     if (options.time_step <= 0) dt = options.safety_factor * critical;
     if (dt > critical)
@@ -58,7 +61,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   loop.time_step = dt;
   loop.end_time = options.end_time;
   timings_["time_step"] = dt;
-  timings_["bonds"] = static_cast<Real>(body_->bonds());
+  timings_["bonds"] = ranks_ ? static_cast<Real>(comm_.sum(body_->bonds())) : static_cast<Real>(body_->bonds());
   const Index every = std::max<Index>(1, steps / std::max(1, options.outputs));
   const std::vector<char> free = free_dofs(true);
   Eigen::Map<Eigen::VectorXd> u(u_.data(), 3 * n), v(velocity_.data(), 3 * n);
@@ -67,6 +70,11 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     apply_prescribed(u_, 0.0, false);
     apply_prescribed(velocity_, 0.0, true);
   }
+  // several ranks: the halo's displacements from their owners, before every force evaluation
+  auto exchange_halo = [&] {
+    if (ranks_) ranks_->halo.exchange(u_.data(), 3);
+  };
+  exchange_halo();
   auto time_of = [&](Index step) { return loop.origin_time + static_cast<Real>(step - loop.origin_step) * dt; };
   auto forces = [&](Real t) {
     model_->update(u_, *state_);
@@ -90,8 +98,9 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     forces(0.0);
     acceleration.resize(3 * n);
     accelerate();
-    energy_internal_ = model_->strain_energy(*state_);
-    energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
+    energy_internal_ = comm_.sum(model_->strain_energy(*state_));
+    energy_kinetic_ = ranks_ ? comm_.sum(0.5 * (mass.array() * v.array().square() * owned_dof_.array()).sum())
+                             : 0.5 * (mass.array() * v.array().square()).sum();
     loop.initial_total = energy_internal_ + energy_kinetic_;
     energy_external_ = 0;
     sink->output_point(0, 0.0, 0.0);
@@ -114,6 +123,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
          apply_prescribed(velocity_, (t - 0.5 * dt) / options.end_time, true);
          for (Index d = 0; d < 3 * n; ++d) u[d] += dt * v[d];
          apply_prescribed(u_, t / options.end_time, false);
+         exchange_halo();
        }},
       {"forces",  // bond state, internal and external forces, accelerations (the bond loop)
        [&] {
@@ -132,9 +142,17 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
        [&] {
          const PointMatrix g_new = support_force();
          const Eigen::Map<const Eigen::VectorXd> go(g_old.data(), 3 * n), gn(g_new.data(), 3 * n);
-         energy_external_ += 0.5 * (go + gn).dot(u - u_old);
+         if (ranks_) {  // the owned dofs of every rank, one reduction
+           std::vector<Real> sums{0.5 * ((go + gn).array() * (u - u_old).array() * owned_dof_.array()).sum(),
+                                  0.5 * (mass.array() * v.array().square() * owned_dof_.array()).sum()};
+           comm_.sum(sums);
+           energy_external_ += sums[0];
+           energy_kinetic_ = sums[1];
+         } else {
+           energy_external_ += 0.5 * (go + gn).dot(u - u_old);
+           energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
+         }
          g_old = g_new;
-         energy_kinetic_ = 0.5 * (mass.array() * v.array().square()).sum();
          if (!std::isfinite(energy_kinetic_))
            throw AnalysisError(fmt::format("explicit dynamics: non-finite velocity at step {} (t = {:.4g})", step, t));
        }}};
@@ -145,7 +163,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     steps_ = step;
     if (step % every == 0 || step == steps) {
       // the strain energy (one more pass over the bonds) only where it is reported
-      energy_internal_ = model_->strain_energy(*state_);
+      energy_internal_ = comm_.sum(model_->strain_energy(*state_));
       if (!std::isfinite(energy_internal_))
         throw AnalysisError(fmt::format("explicit dynamics: non-finite strain energy at step {} (t = {:.4g})", step, t));
       timings_["energy_error"] = (energy_internal_ + energy_kinetic_ - energy_external_ - initial_total) /

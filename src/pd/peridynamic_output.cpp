@@ -54,7 +54,62 @@ Vec3 PeridynamicAnalysis::strain_gradient_at(Index i, Mat3& gradient) const {
   return gradient.diagonal();
 }
 
-Real PeridynamicAnalysis::probe(const Probe& p) const {
+Real PeridynamicAnalysis::probe(const Probe& p) const { return ranks_ ? distributed_probe(p) : local_probe(p); }
+
+Real PeridynamicAnalysis::distributed_probe(const Probe& p) const {
+  Probe local = p;  // the selection's nodes this rank owns, as local indices
+  local.nodes.clear();
+  for (Index g : p.nodes) {
+    const Index k = ranks_->local_of(g);
+    if (k >= 0 && ranks_->owns(k)) local.nodes.push_back(k);
+  }
+  if (p.field == "reaction_force") {
+    const Vec3 r = reaction(local.nodes);
+    std::vector<Real> sum{r.x(), r.y(), r.z()};
+    comm_.sum(sum);
+    const Vec3 total(sum[0], sum[1], sum[2]);
+    if (p.component == "magnitude") return total.norm();
+    return total[p.component == "x" ? 0 : p.component == "y" ? 1 : 2];
+  }
+  if (p.field == "energy" || p.field == "eigenvalue" || p.field == "critical_load") return local_probe(p);
+  // a node's value: each rank's nearest owned candidate, the nearest of those (ties: the lower global
+  // index, as one process takes the first), evaluated by its owner
+  Real distance = INFINITY;
+  Index node = -1;
+  if (p.at) {
+    auto consider = [&](Index k) {
+      const Real d = (problem_.positions.col(k) - *p.at).squaredNorm();
+      if (d < distance) distance = d, node = k;
+    };
+    if (p.nodes.empty()) {
+      for (Index k = 0; k < body_->nodes(); ++k)
+        if (ranks_->owns(k)) consider(k);
+    } else {
+      for (Index k : local.nodes) consider(k);
+    }
+  } else if (!p.nodes.empty()) {
+    const Index k = ranks_->local_of(p.nodes.front());
+    if (k >= 0 && ranks_->owns(k)) distance = 0, node = k;
+  }
+  const Real global_node = node >= 0 ? static_cast<Real>(ranks_->global[static_cast<std::size_t>(node)]) : INFINITY;
+  const std::vector<Real> all = comm_.all_gather(std::vector<Real>{distance, global_node});
+  int winner = 0;
+  for (int r = 1; r < comm_.size(); ++r) {
+    const Real d = all[2 * static_cast<std::size_t>(r)], g = all[2 * static_cast<std::size_t>(r) + 1];
+    const Real bd = all[2 * static_cast<std::size_t>(winner)], bg = all[2 * static_cast<std::size_t>(winner) + 1];
+    if (d < bd || (d == bd && g < bg)) winner = r;
+  }
+  Real value = 0;
+  if (winner == comm_.rank() && node >= 0) {
+    Probe single = p;
+    single.at.reset();
+    single.nodes = {node};
+    value = local_probe(single);
+  }
+  return comm_.sum(value);
+}
+
+Real PeridynamicAnalysis::local_probe(const Probe& p) const {
   auto component_of = [&](const Vec3& v) {
     if (p.component == "magnitude") return v.norm();
     return v[p.component == "x" ? 0 : p.component == "y" ? 1 : 2];
@@ -183,13 +238,27 @@ OutputFrame PeridynamicAnalysis::frame() const {
   PointField dilatation{"dilatation", 1, std::vector<Real>(total_dilatation.data(), total_dilatation.data() + n)};
   f.point_fields.push_back(std::move(dilatation));
   for (std::size_t k = 0; k < modes_.size(); ++k) vector_field(fmt::format("mode_{}", k + 1), modes_[k]);
-  return f;
+  if (!ranks_) return f;
+  // several ranks: the rank's own nodes (its VTU piece)
+  std::vector<Index> own;
+  for (Index k = 0; k < n; ++k)
+    if (ranks_->owns(k)) own.push_back(k);
+  OutputFrame piece;
+  piece.points.resize(3, static_cast<Index>(own.size()));
+  for (std::size_t k = 0; k < own.size(); ++k) piece.points.col(static_cast<Index>(k)) = f.points.col(own[k]);
+  for (const PointField& field : f.point_fields) {
+    PointField part{field.name, field.components, {}};
+    for (Index k : own)
+      for (int c = 0; c < field.components; ++c) part.values.push_back(field.values[static_cast<std::size_t>(k * field.components + c)]);
+    piece.point_fields.push_back(std::move(part));
+  }
+  return piece;
 }
 
 RunCounts PeridynamicAnalysis::counts() const {
   RunCounts c;
-  c.nodes = body_->nodes();
-  c.dofs = 3 * body_->nodes();
+  c.nodes = ranks_ ? ranks_->global_count : body_->nodes();
+  c.dofs = 3 * c.nodes;
   c.steps = steps_;
   return c;
 }

@@ -1,0 +1,126 @@
+#include "parallel/communicator.hpp"
+
+#include <mpi.h>
+
+#include <cstdlib>
+#include <numeric>
+
+namespace lamina::parallel {
+
+namespace {
+bool mpi_started = false;
+
+bool launched_by_mpirun() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(name) != nullptr) return true;
+  return false;
+}
+
+MPI_Datatype index_type() { return sizeof(Index) == 8 ? MPI_INT64_T : MPI_INT32_T; }
+}  // namespace
+
+Environment::Environment(int& argc, char**& argv) {
+  if (!launched_by_mpirun()) return;
+  int provided = 0;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  mpi_started = true;
+}
+
+Environment::~Environment() {
+  if (!mpi_started) return;
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (!finalized) MPI_Finalize();
+}
+
+bool Environment::started() { return mpi_started; }
+
+Communicator::Communicator() {
+  if (!mpi_started) return;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+const Communicator& Communicator::world() {
+  static const Communicator world;
+  return world;
+}
+
+Real Communicator::sum(Real value) const {
+  if (!distributed()) return value;
+  Real out = 0;
+  MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  return out;
+}
+
+void Communicator::sum(std::vector<Real>& values) const {
+  if (!distributed() || values.empty()) return;
+  MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+}
+
+Real Communicator::max(Real value) const {
+  if (!distributed()) return value;
+  Real out = 0;
+  MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return out;
+}
+
+Index Communicator::sum(Index value) const {
+  if (!distributed()) return value;
+  Index out = 0;
+  MPI_Allreduce(&value, &out, 1, index_type(), MPI_SUM, MPI_COMM_WORLD);
+  return out;
+}
+
+std::vector<Real> Communicator::all_gather(const std::vector<Real>& values) const {
+  if (!distributed()) return values;
+  std::vector<Real> out(values.size() * static_cast<std::size_t>(size_));
+  MPI_Allgather(values.data(), static_cast<int>(values.size()), MPI_DOUBLE, out.data(), static_cast<int>(values.size()),
+                MPI_DOUBLE, MPI_COMM_WORLD);
+  return out;
+}
+
+std::vector<int> Communicator::all_gather(int value) const {
+  if (!distributed()) return {value};
+  std::vector<int> out(static_cast<std::size_t>(size_));
+  MPI_Allgather(&value, 1, MPI_INT, out.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  return out;
+}
+
+std::vector<Index> Communicator::all_gather_lists(const std::vector<Index>& values) const {
+  if (!distributed()) return values;
+  const std::vector<int> counts = all_gather(static_cast<int>(values.size()));
+  std::vector<int> offsets(counts.size(), 0);
+  std::partial_sum(counts.begin(), counts.end() - 1, offsets.begin() + 1);
+  std::vector<Index> out(static_cast<std::size_t>(offsets.back() + counts.back()));
+  MPI_Allgatherv(values.data(), static_cast<int>(values.size()), index_type(), out.data(), counts.data(), offsets.data(),
+                 index_type(), MPI_COMM_WORLD);
+  return out;
+}
+
+std::string Communicator::broadcast(const std::string& value) const {
+  if (!distributed()) return value;
+  int length = static_cast<int>(value.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  std::string out = root() ? value : std::string(static_cast<std::size_t>(length), '\0');
+  MPI_Bcast(out.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  return out;
+}
+
+bool Communicator::all(bool value) const {
+  if (!distributed()) return value;
+  int in = value ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  return out == 1;
+}
+
+void Communicator::barrier() const {
+  if (distributed()) MPI_Barrier(MPI_COMM_WORLD);
+}
+
+void Communicator::abort(int code) const {
+  if (mpi_started) MPI_Abort(MPI_COMM_WORLD, code);
+  std::exit(code);
+}
+
+}  // namespace lamina::parallel

@@ -1,0 +1,59 @@
+#pragma once
+// Communicator: the ranks of a run (MPI_COMM_WORLD when lamina was started by mpirun, else one rank
+// with no MPI call at all) and the few collective operations the families need: sums, maxima,
+// gathers and broadcasts. Reductions are plain MPI_Allreduce: their result depends on the rank count
+// in the last bits only (docs/scaling.md).
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace lamina::parallel {
+
+/// Starts MPI when this process was launched by mpirun / srun (OMPI_COMM_WORLD_SIZE, PMI_SIZE or
+/// PMIX_RANK in the environment) and finalizes it on destruction; a process started on its own
+/// never calls MPI (one rank). One per program, in main().
+class Environment {
+ public:
+  Environment(int& argc, char**& argv);
+  ~Environment();
+  Environment(const Environment&) = delete;
+  Environment& operator=(const Environment&) = delete;
+  /// Whether MPI was started by this environment.
+  static bool started();
+};
+
+class Communicator {
+ public:
+  /// All ranks of the run (one rank without MPI).
+  static const Communicator& world();
+
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  bool root() const { return rank_ == 0; }
+  bool distributed() const { return size_ > 1; }
+
+  Real sum(Real value) const;
+  /// Element-wise sums of equal-length vectors on every rank.
+  void sum(std::vector<Real>& values) const;
+  Real max(Real value) const;
+  Index sum(Index value) const;
+  /// values of every rank, rank order, on every rank.
+  std::vector<Real> all_gather(const std::vector<Real>& values) const;
+  std::vector<int> all_gather(int value) const;
+  /// The concatenation of every rank's list, rank order, on every rank.
+  std::vector<Index> all_gather_lists(const std::vector<Index>& values) const;
+  /// Rank 0's value on every rank.
+  std::string broadcast(const std::string& value) const;
+  /// Whether every rank passes true.
+  bool all(bool value) const;
+  void barrier() const;
+  /// Stops every rank (an error seen by one rank only, where the others wait in a collective).
+  [[noreturn]] void abort(int code) const;
+
+ private:
+  Communicator();
+  int rank_ = 0, size_ = 1;
+};
+
+}  // namespace lamina::parallel

@@ -1,0 +1,96 @@
+#include "parallel/halo_exchange.hpp"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+namespace lamina::parallel {
+
+namespace {
+MPI_Datatype index_type() { return sizeof(Index) == 8 ? MPI_INT64_T : MPI_INT32_T; }
+}  // namespace
+
+HaloExchange::HaloExchange(const std::vector<Index>& global, const std::vector<int>& owner, const Communicator& comm) {
+  if (!comm.distributed()) return;
+  const int ranks = comm.size();
+  // the halo nodes of each owner (global indices, ascending as `global` is)
+  std::vector<std::vector<Index>> wanted(static_cast<std::size_t>(ranks));
+  std::vector<std::vector<Index>> wanted_local(static_cast<std::size_t>(ranks));
+  for (std::size_t k = 0; k < global.size(); ++k)
+    if (owner[k] != comm.rank()) {
+      wanted[static_cast<std::size_t>(owner[k])].push_back(global[k]);
+      wanted_local[static_cast<std::size_t>(owner[k])].push_back(static_cast<Index>(k));
+    }
+  std::vector<int> send_counts(static_cast<std::size_t>(ranks)), receive_counts(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) send_counts[static_cast<std::size_t>(r)] = static_cast<int>(wanted[static_cast<std::size_t>(r)].size());
+  MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  std::vector<int> send_offsets(static_cast<std::size_t>(ranks), 0), receive_offsets(static_cast<std::size_t>(ranks), 0);
+  std::partial_sum(send_counts.begin(), send_counts.end() - 1, send_offsets.begin() + 1);
+  std::partial_sum(receive_counts.begin(), receive_counts.end() - 1, receive_offsets.begin() + 1);
+  std::vector<Index> requests, asked(static_cast<std::size_t>(receive_offsets.back() + receive_counts.back()));
+  for (const auto& list : wanted) requests.insert(requests.end(), list.begin(), list.end());
+  MPI_Alltoallv(requests.data(), send_counts.data(), send_offsets.data(), index_type(), asked.data(), receive_counts.data(),
+                receive_offsets.data(), index_type(), MPI_COMM_WORLD);
+  for (int r = 0; r < ranks; ++r) {
+    const auto ru = static_cast<std::size_t>(r);
+    if (send_counts[ru] == 0 && receive_counts[ru] == 0) continue;
+    Neighbour nb;
+    nb.rank = r;
+    nb.receive = wanted_local[ru];
+    for (int k = 0; k < receive_counts[ru]; ++k) {
+      const Index g = asked[static_cast<std::size_t>(receive_offsets[ru] + k)];
+      const auto it = std::lower_bound(global.begin(), global.end(), g);
+      if (it == global.end() || *it != g || owner[static_cast<std::size_t>(it - global.begin())] != comm.rank())
+        throw std::logic_error("halo exchange: a rank asked for a node this rank does not own");
+      nb.send.push_back(static_cast<Index>(it - global.begin()));
+    }
+    neighbours_.push_back(std::move(nb));
+  }
+}
+
+void HaloExchange::exchange(Real* data, int rows) const {
+  if (neighbours_.empty()) return;
+  std::vector<std::vector<Real>> out(neighbours_.size()), in(neighbours_.size());
+  std::vector<MPI_Request> requests;
+  requests.reserve(2 * neighbours_.size());
+  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
+    const Neighbour& nb = neighbours_[k];
+    in[k].resize(nb.receive.size() * static_cast<std::size_t>(rows));
+    if (!in[k].empty()) {
+      requests.emplace_back();
+      MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_DOUBLE, nb.rank, 17, MPI_COMM_WORLD, &requests.back());
+    }
+  }
+  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
+    const Neighbour& nb = neighbours_[k];
+    out[k].resize(nb.send.size() * static_cast<std::size_t>(rows));
+    for (std::size_t s = 0; s < nb.send.size(); ++s)
+      std::copy_n(data + nb.send[s] * rows, rows, out[k].data() + s * static_cast<std::size_t>(rows));
+    if (!out[k].empty()) {
+      requests.emplace_back();
+      MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_DOUBLE, nb.rank, 17, MPI_COMM_WORLD, &requests.back());
+    }
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
+    const Neighbour& nb = neighbours_[k];
+    for (std::size_t s = 0; s < nb.receive.size(); ++s)
+      std::copy_n(in[k].data() + s * static_cast<std::size_t>(rows), rows, data + nb.receive[s] * rows);
+  }
+}
+
+Index HaloExchange::halo_nodes() const {
+  Index n = 0;
+  for (const auto& nb : neighbours_) n += static_cast<Index>(nb.receive.size());
+  return n;
+}
+
+Index HaloExchange::sent_nodes() const {
+  Index n = 0;
+  for (const auto& nb : neighbours_) n += static_cast<Index>(nb.send.size());
+  return n;
+}
+
+}  // namespace lamina::parallel
