@@ -49,10 +49,10 @@ int info() {
   return 0;
 }
 
-/// `lamina run ... --ranks N`: the same command on N processes under mpirun (which must be on the PATH);
+/// `lamina run|validate ... --ranks N`: the same command on N processes under mpirun (which must be on the PATH);
 /// threads per rank: --threads, else the cores shared out. Returns only when mpirun cannot be started.
 int run_under_mpirun(int argc, char** argv, int ranks, int threads) {
-  std::vector<std::string> args{"mpirun", "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none"};
+  std::vector<std::string> args{"mpirun", "-np", std::to_string(ranks), "--oversubscribe", "--bind-to", "none", "--quiet"};
   if (::geteuid() == 0) args.push_back("--allow-run-as-root");
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
@@ -119,6 +119,11 @@ int main(int argc, char** argv) {
   validate->add_option("--dir", validate_options.validation_directory, "folder of validation cases");
   validate->add_flag("--fast", validate_options.fast, "only the fast subset (what CI runs)");
   validate->add_option("--threads", validate_options.threads, "OpenMP threads (default: all)");
+  int validate_ranks = 1;
+  validate->add_option("--ranks", validate_ranks,
+                       "run every case on N MPI processes (starts mpirun); cases that run on one process only are "
+                       "reported, not failed")
+      ->check(CLI::PositiveNumber);
 
   auto* info_command = cli.add_subcommand("info", "version, build type, features, threads");
 
@@ -160,7 +165,10 @@ int main(int argc, char** argv) {
       std::cout << lamina::io::omll_case_yaml(lamina::io::read_omll_deck(convert_path), convert_path);
       return 0;
     }
-    if (*validate) return lamina::app::validate(validate_options);
+    if (*validate) {
+      if (validate_ranks > 1 && !comm.distributed()) return run_under_mpirun(argc, argv, validate_ranks, validate_options.threads);
+      return lamina::app::validate(validate_options);
+    }
     if (*info_command) return info();
   } catch (const lamina::InputError& e) {
     return print_input_error(e);

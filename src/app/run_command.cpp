@@ -247,6 +247,7 @@ RunResult run_case(const RunOptions& options) {
   const auto& comm = parallel::Communicator::world();
   if (comm.distributed() && !prepared.method->distributed) {
     result.exit_code = 2;
+    result.single_process_only = true;
     result.error = locate(InputError("method", fmt::format("a method that runs on several ranks (pd) for a run on {} ranks; "
                                                            "run this case on one process (without mpirun / --ranks)",
                                                            comm.size()),
@@ -268,6 +269,7 @@ RunResult run_case(const RunOptions& options) {
     model = build_point_model(c, prepared.options ? prepared.options->model_request() : ModelRequest{});
     analysis = prepared.method->create(c, model, *prepared.options);
   } catch (const InputError& e) {
+    result.single_process_only = dynamic_cast<const SingleProcessOnly*>(&e) != nullptr;
     result.exit_code = 2;
     result.error = locate(e, c).what();  // method set-up errors name a key: give its line
     return result;

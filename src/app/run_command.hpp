@@ -66,6 +66,7 @@ struct RunResult {
   std::vector<std::vector<Real>> history_rows;
   std::filesystem::path output_directory;
   std::optional<OutputFrame> last_frame;  // with RunOptions::keep_last_frame
+  bool single_process_only = false;       // exit 2 because the case runs on one process only (several ranks)
 };
 
 RunResult run_case(const RunOptions& options);

@@ -32,6 +32,12 @@ class InputError : public std::runtime_error {
   std::vector<Diagnostic> diagnostics_;
 };
 
+/// A valid case that the rank count of this run cannot do (one that runs on one process only); exit 2.
+class SingleProcessOnly : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 /// The analysis itself failed (singular system, divergence, non-finite values).
 class AnalysisError : public std::runtime_error {
  public:

@@ -204,15 +204,15 @@ void PeridynamicAnalysis::check_distributable() const {
     const char* kind = problem_.analysis == PdAnalysisKind::quasi_static ? "quasi_static"
                        : problem_.analysis == PdAnalysisKind::buckling   ? "buckling"
                                                                          : "linear_static";
-    throw InputError("pd.analysis", fmt::format("explicit on {} (linear_static, quasi_static and buckling run on one "
+    throw SingleProcessOnly("pd.analysis", fmt::format("explicit on {} (linear_static, quasi_static and buckling run on one "
                                                 "process: start lamina without mpirun / --ranks)", ranks),
                      kind);
   }
   const BodyOptions& o = problem_.body;
   if (o.plate_model == PlateModel::automatic && o.kinematics == Kinematics::three_dimensional &&
       o.surface_correction != SurfaceCorrection::plate && find_plate_columns(problem_.positions, problem_.volumes))
-    throw InputError("pd.plate_model",
-                     fmt::format("lattice on {} (this body is a plate lattice, whose director plate model runs on one "
+    throw SingleProcessOnly("pd.plate_model",
+                            fmt::format("lattice on {} (this body is a plate lattice, whose director plate model runs on one "
                                  "process)", ranks),
                      "automatic");
 }

@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""Distributed runs (docs/scaling.md): each case of this folder on 1, 2 and 3 MPI ranks (lamina run
+--ranks N, which starts mpirun), full and lean bond storage. Passes when
+  - every history column on N ranks equals the one-process column within 1e-10 relative (to the
+    column's largest magnitude), the counts in summary.json are equal;
+  - each VTU frame is a .pvtu of N pieces whose points add up to the body's nodes;
+  - a case that runs on one process only (pd quasi_static, another method) exits 2 on 2 ranks with the reason.
+Usage: run_rank_tests.py LAMINA CASE_DIR WORK_DIR"""
+import csv
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+lamina, case_dir, work = sys.argv[1], sys.argv[2], sys.argv[3]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+TOLERANCE = 1e-10
+failures = []
+
+
+def run(case, ranks, out, extra=()):
+    command = [lamina, "run", case, "-o", out, "--quiet", "--threads", "1"] + list(extra)
+    if ranks > 1:
+        command += ["--ranks", str(ranks)]
+    return subprocess.run(command, capture_output=True, text=True, timeout=600)
+
+
+def history(folder):
+    with open(os.path.join(folder, "history.csv")) as f:
+        rows = list(csv.reader(f))
+    return rows[0], [[float(x) for x in r] for r in rows[1:]]
+
+
+def check_pieces(folder, ranks, nodes, label):
+    with open(os.path.join(folder, "result.pvd")) as f:
+        frames = re.findall(r'file="([^"]+)"', f.read())
+    if not frames:
+        failures.append(f"{label}: no frames in result.pvd")
+        return
+    for frame in frames:
+        if not frame.endswith(".pvtu"):
+            failures.append(f"{label}: {frame} is not a .pvtu")
+            return
+        with open(os.path.join(folder, frame)) as f:
+            pieces = re.findall(r'Source="([^"]+)"', f.read())
+        if len(pieces) != ranks:
+            failures.append(f"{label}: {frame} has {len(pieces)} pieces, expected {ranks}")
+        points = 0
+        for piece in pieces:
+            with open(os.path.join(folder, piece)) as f:
+                points += int(re.search(r'NumberOfPoints="(\d+)"', f.read(4096)).group(1))
+        if points != nodes:
+            failures.append(f"{label}: {frame} pieces hold {points} points, the body {nodes}")
+
+
+variants = {"full": [], "lean": ["--set", "pd.bond_storage=lean", "--set", "pd.explicit.time_step=0.004"]}
+for name in sorted(os.listdir(case_dir)):
+    if not name.endswith(".yaml"):
+        continue
+    case = os.path.join(case_dir, name)
+    for variant, extra in variants.items():
+        label0 = f"{name}/{variant}"
+        one = os.path.join(work, f"{name}_{variant}_1")
+        r = run(case, 1, one, extra)
+        if r.returncode != 0:
+            failures.append(f"{label0} on 1 rank: exit {r.returncode}: {r.stderr.strip()}")
+            continue
+        columns, reference = history(one)
+        with open(os.path.join(one, "summary.json")) as f:
+            counts = json.load(f)["counts"]
+        for ranks in (2, 3):
+            label = f"{label0} on {ranks} ranks"
+            out = os.path.join(work, f"{name}_{variant}_{ranks}")
+            r = run(case, ranks, out, extra)
+            if r.returncode != 0:
+                failures.append(f"{label}: exit {r.returncode}: {r.stderr.strip()}")
+                continue
+            cols, rows = history(out)
+            with open(os.path.join(out, "summary.json")) as f:
+                summary = json.load(f)
+            if cols != columns or len(rows) != len(reference):
+                failures.append(f"{label}: history has {len(rows)} rows / columns {cols}, one process {len(reference)} / {columns}")
+                continue
+            if summary["counts"] != counts or summary.get("ranks") != ranks:
+                failures.append(f"{label}: counts {summary['counts']} ranks {summary.get('ranks')}, one process {counts}")
+            worst, where = 0.0, ""
+            for c, column in enumerate(columns):
+                scale = max(max(abs(row[c]) for row in reference), 1e-300)
+                for a, b in zip(reference, rows):
+                    d = abs(a[c] - b[c]) / scale
+                    if d > worst:
+                        worst, where = d, column
+            print(f"{label}: largest relative difference to one process {worst:.2e} ({where or '-'})")
+            if worst > TOLERANCE:
+                failures.append(f"{label}: {where} differs from one process by {worst:.2e} (tolerance {TOLERANCE:g})")
+            check_pieces(out, ranks, counts["nodes"], label)
+
+# cases that run on one process only (pd quasi_static by ADR, another method): exit 2 with the reason,
+# no output folder
+source = os.path.dirname(os.path.dirname(os.path.abspath(case_dir)))
+for case in ("validation/pd_bar_tension/case.yaml", "validation/efg_patch_regular/case.yaml"):
+    out = os.path.join(work, "refused_" + case.split("/")[1])
+    refused = run(os.path.join(source, case), 2, out)
+    if refused.returncode != 2 or "one process" not in refused.stderr:
+        failures.append(f"{case} on 2 ranks: exit {refused.returncode}, stderr {refused.stderr.strip()!r}; expected exit 2 "
+                        "naming one process")
+    elif os.path.exists(out):
+        failures.append(f"{case} on 2 ranks: an output folder was written")
+    else:
+        print(f"{case} on 2 ranks: exit 2:", refused.stderr.strip().splitlines()[-1])
+
+for f in failures:
+    print("FAIL", f)
+sys.exit(1 if failures else 0)
