@@ -13,6 +13,7 @@
 #include "app/model.hpp"
 #include "app/progress_line.hpp"
 #include "core/error.hpp"
+#include "core/memory.hpp"
 #include "core/stopwatch.hpp"
 #include "core/version.hpp"
 #include "io/case_reader.hpp"
@@ -412,6 +413,9 @@ RunResult run_case(const RunOptions& options) {
   nlohmann::json timing = {{"setup_s", setup_seconds}, {"solve_s", seconds_since(run_start)}, {"total_s", seconds_since(start)}};
   for (const auto& [name, value] : analysis->timings()) timing["stage_" + name] = value;
   summary["timing"] = timing;
+  // peak resident memory: this process, and on several ranks their sum and largest
+  const Real peak = static_cast<Real>(peak_resident_bytes());
+  summary["memory"] = {{"peak_bytes", comm.sum(peak)}, {"peak_bytes_largest_rank", comm.max(peak)}};
   comm.barrier();  // every rank's pieces are written before rank 0 moves the folder into place
   if (!result_set) {
     result.summary = summary;

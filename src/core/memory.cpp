@@ -1,5 +1,7 @@
 #include "core/memory.hpp"
 
+#include <sys/resource.h>
+
 #include <cstdint>
 
 #if defined(__linux__)
@@ -26,6 +28,16 @@ void advise_huge_pages(void* data, std::size_t bytes) {
 std::size_t physical_memory_bytes() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
   return pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(page) : 0;
+}
+
+}  // namespace lamina
+
+namespace lamina {
+
+std::size_t peak_resident_bytes() {
+  struct rusage usage {};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  return static_cast<std::size_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
 }
 
 }  // namespace lamina

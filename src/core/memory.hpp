@@ -16,4 +16,7 @@ void advise_huge_pages(void* data, std::size_t bytes);
 /// Physical memory of this machine in bytes (0 if unknown).
 std::size_t physical_memory_bytes();
 
+/// The largest resident memory of this process so far, in bytes (getrusage; 0 if unknown).
+std::size_t peak_resident_bytes();
+
 }  // namespace lamina

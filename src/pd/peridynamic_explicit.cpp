@@ -61,7 +61,15 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   loop.time_step = dt;
   loop.end_time = options.end_time;
   timings_["time_step"] = dt;
-  timings_["bonds"] = ranks_ ? static_cast<Real>(comm_.sum(body_->bonds())) : static_cast<Real>(body_->bonds());
+  // the body's directed bonds (several ranks: those of the owned nodes, summed)
+  Index owned_bonds = body_->bonds();
+  if (ranks_) {
+    owned_bonds = 0;
+    for (Index i = 0; i < n; ++i)
+      if (body_->owns(i)) owned_bonds += body_->end_bond(i) - body_->first_bond(i);
+    owned_bonds = comm_.sum(owned_bonds);
+  }
+  timings_["bonds"] = static_cast<Real>(owned_bonds);
   const Index every = std::max<Index>(1, steps / std::max(1, options.outputs));
   const std::vector<char> free = free_dofs(true);
   Eigen::Map<Eigen::VectorXd> u(u_.data(), 3 * n), v(velocity_.data(), 3 * n);
