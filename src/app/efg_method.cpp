@@ -144,6 +144,7 @@ efg::EfgProblem make_efg_problem(const io::Case& c, const Model& model, const ef
   p.geometry = c.geometry;
   p.cloud = model.cloud;
   p.options = options;
+  p.options.solver = c.solver;
   std::vector<Diagnostic> problems;
   auto problem_at = [&](const io::SourceLocation& where, const std::string& key, const std::string& expected,
                         const std::string& found) {
@@ -193,7 +194,8 @@ efg::EfgProblem make_efg_problem(const io::Case& c, const Model& model, const ef
 
 MethodEntry efg_method_entry() {
   return MethodEntry{io::MethodKeys{"efg", {"nodes", "jitter"}, true},
-                     "element-free Galerkin / collocation / weighted least squares, 3D linear elastostatics (seed 004)", read_efg, create_efg};
+                     "element-free Galerkin / collocation / weighted least squares, 3D linear elastostatics (seed 004)", read_efg, create_efg,
+                     {}, /*distributed=*/true};
 }
 
 }  // namespace lamina::app

@@ -38,6 +38,24 @@ std::string resolved_yaml(const io::Case& c) {
   return out.c_str();
 }
 
+/// The piece of a whole-body frame rank `part` of `parts` writes: a contiguous block of the points for
+/// point clouds (vertex cells); a frame with cells stays whole on rank 0 (empty pieces elsewhere).
+OutputFrame rank_piece(const OutputFrame& whole, int part, int parts) {
+  const Index n = whole.points.cols();
+  Index first = n * part / parts, last = n * (part + 1) / parts;
+  if (whole.cell_vertices > 1) {
+    if (part == 0) return whole;
+    first = last = 0;
+  }
+  OutputFrame piece;
+  piece.points = whole.points.middleCols(first, last - first);
+  for (const PointField& field : whole.point_fields)
+    piece.point_fields.push_back(PointField{
+        field.name, field.components,
+        std::vector<Real>(field.values.begin() + first * field.components, field.values.begin() + last * field.components)});
+  return piece;
+}
+
 /// Thrown out of Analysis::run by the sink when RunOptions::on_output asked to stop.
 struct RunStopped {};
 
@@ -82,6 +100,7 @@ class RunSink : public OutputSink {
       const auto& comm = parallel::Communicator::world();
       if (vtu && !comm.distributed()) results_->write_frame(frame, time);
       if (vtu && comm.distributed()) {  // one piece per rank, the .pvtu and .pvd on rank 0
+        if (!analysis_.frame_is_rank_piece()) frame = rank_piece(frame, comm.rank(), comm.size());
         if (results_) results_->write_parallel_frame(frame, time, comm.size());
         else io::ResultSet::write_piece(staging_, frames_written_, comm.rank(), frame);
         ++frames_written_;

@@ -62,6 +62,9 @@ class Analysis {
   /// Probes the method always reports (e.g. mls_fit's errU, errDU, errDDU).
   virtual std::map<std::string, Real> builtin_probes() const { return {}; }
   virtual OutputFrame frame() const = 0;
+  /// Several ranks: whether frame() is this rank's own piece (a partitioned analysis) rather than the
+  /// whole body, which every rank of a replicated analysis holds (the output splits it then).
+  virtual bool frame_is_rank_piece() const { return false; }
   virtual RunCounts counts() const = 0;
   /// Named timings (seconds) of the stages, e.g. {"setup_s", ...}; summary.json lists them.
   virtual std::map<std::string, Real> timings() const { return {}; }

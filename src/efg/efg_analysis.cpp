@@ -79,8 +79,23 @@ std::string to_string(Formulation formulation) {
   return "?";
 }
 
-EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes)
-    : problem_(std::move(problem)), probes_(std::move(probes)) {
+EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const parallel::Communicator& comm)
+    : problem_(std::move(problem)), probes_(std::move(probes)), comm_(comm) {
+  if (comm_.distributed()) {
+    const auto& o = problem_.options;
+    const std::string ranks = fmt::format("{} ranks", comm_.size());
+    if (o.formulation != Formulation::galerkin)
+      throw SingleProcessOnly("efg.formulation", fmt::format("galerkin on {} (collocation and weighted least squares run on "
+                                                             "one process)", ranks), "a strong form");
+    if (o.essential == EssentialMethod::lagrange)
+      throw SingleProcessOnly("efg.essential", fmt::format("penalty or nitsche on {} (lagrange runs on one process)", ranks),
+                              "lagrange");
+    if (o.correction == IntegrationCorrection::vci)
+      throw SingleProcessOnly("efg.integration.correction",
+                              fmt::format("none on {} (vci makes the system unsymmetric; one process)", ranks), "vci");
+    if (o.solver.type == LinearSolverChoice::Type::cholmod)
+      throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} (cholmod runs on one process)", ranks), "cholmod");
+  }
   for (const auto& p : probes_) {
     const std::string where = "probes." + p.name;
     if (p.field == "displacement") {

@@ -39,6 +39,7 @@
 #include "efg/volumetric_projection.hpp"
 #include "mls/mls_shape_functions.hpp"
 #include "mls/neighbour_search.hpp"
+#include "parallel/communicator.hpp"
 #include "solve/sparse_linear_solver.hpp"
 
 namespace lamina::efg {
@@ -46,7 +47,11 @@ namespace lamina::efg {
 class EfgAnalysis : public Analysis {
  public:
   /// Checks the probes (InputError for unsupported fields / components).
-  EfgAnalysis(EfgProblem problem, std::vector<Probe> probes);
+  /// On several ranks (mpirun) every rank builds the whole model, assembles its slab of the background
+  /// cells and the system is solved by PETSc (solver: mumps, the default there, or cg); results are
+  /// then whole on every rank. InputError for the formulations that run on one process only.
+  EfgAnalysis(EfgProblem problem, std::vector<Probe> probes,
+              const parallel::Communicator& comm = parallel::Communicator::world());
   ~EfgAnalysis() override;
 
   std::string method() const override { return "efg"; }
@@ -112,6 +117,7 @@ class EfgAnalysis : public Analysis {
 
   EfgProblem problem_;
   std::vector<Probe> probes_;
+  const parallel::Communicator& comm_;
   std::vector<material::LinearElastic> materials_;
   std::unique_ptr<BackgroundCells> cells_;
   VolumeQuadrature volume_;

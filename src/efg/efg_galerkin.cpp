@@ -14,6 +14,7 @@
 #include "efg/galerkin_assembly.hpp"
 #include "efg/nodal_field.hpp"
 #include "solve/block_pattern.hpp"
+#include "solve/petsc_linear_solver.hpp"
 
 namespace lamina::efg {
 
@@ -106,6 +107,11 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
     input.material_of_reduced_point = &material_of_reduced_point_;
     input.vci_reduced = vci ? &xi_reduced : nullptr;
   }
+  // several ranks: this rank's slab of the cells; the boundary terms and loads are rank 0's (the shares
+  // add up in the distributed matrix)
+  input.part = comm_.rank();
+  input.parts = comm_.size();
+  const bool adds_boundary = comm_.root();
   const VolumeAssemblyReport volume_report = assemble_volume(input, pattern, values, f);
   const Real volume_seconds = seconds_since(start);
   timings_["assembly_volume_s"] = volume_seconds;
@@ -116,7 +122,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
 
   // loads
   start = Clock::now();
-  {
+  if (adds_boundary) {
     PointMatrix load_x(3, static_cast<Index>(point_loads_.size()));
     for (std::size_t i = 0; i < point_loads_.size(); ++i) load_x.col(static_cast<Index>(i)) = point_loads_[i].x;
     const auto load_shapes = shapes_->evaluate_all(load_x, 0);
@@ -127,12 +133,22 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
     }
   }
   f_loads_ = f;
+  if (comm_.distributed()) {  // the whole load vector on every rank (external work)
+    std::vector<Real> all(f_loads_.data(), f_loads_.data() + f_loads_.size());
+    comm_.sum(all);
+    f_loads_ = Eigen::Map<const Eigen::VectorXd>(all.data(), f_loads_.size());
+  }
 
   // penalty scale: max diagonal of the volume stiffness over max nodal sum of w phi^2
   Real max_diagonal = 0;
-  for (Index d = 0; d < 3 * n; ++d) {
-    const Index p = pattern.position(d, d);
-    if (p >= 0) max_diagonal = std::max(max_diagonal, std::abs(values[p]));
+  {
+    std::vector<Real> diagonal(static_cast<std::size_t>(3 * n), 0.0);  // several ranks: their shares summed
+    for (Index d = 0; d < 3 * n; ++d) {
+      const Index p = pattern.position(d, d);
+      if (p >= 0) diagonal[static_cast<std::size_t>(d)] = values[p];
+    }
+    comm_.sum(diagonal);
+    for (const Real v : diagonal) max_diagonal = std::max(max_diagonal, std::abs(v));
   }
   {
     Eigen::VectorXd surface_sum = Eigen::VectorXd::Zero(n), point_sum = Eigen::VectorXd::Zero(n);
@@ -162,7 +178,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   timings_["penalty_surface"] = alpha_surface_;
   timings_["penalty_point"] = alpha_point_;
   // after the penalty scale, which is taken from the mu part (a lambda-sized penalty locks the constrained faces)
-  if (projected) {
+  if (projected && adds_boundary) {
     const auto projection_start = Clock::now();
     projection_->add_stiffness(pattern, values);  // K += G^T diag(lambda_I / M_I) G
     timings_["projection_s"] += seconds_since(projection_start);
@@ -191,7 +207,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
         ++row;
       }
     }
-  } else {
+  } else if (adds_boundary) {
     for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
       const auto& p = constraint_points_[i];
       const auto& sv = constraint_shapes[i];
@@ -242,6 +258,9 @@ void EfgAnalysis::solve_galerkin(OutputSink* sink) {
     const Eigen::VectorXd x = solve::solve_general(A, rhs, solver_report_);
     u_ = x.head(3 * n);
     multipliers_ = x.tail(multipliers);
+  } else if (symmetric && (comm_.distributed() || (problem_.options.solver.type != LinearSolverChoice::Type::automatic &&
+                                                     problem_.options.solver.type != LinearSolverChoice::Type::cholmod))) {
+    u_ = solve::solve_symmetric_petsc(K, f, problem_.options.solver, comm_, solver_report_);
   } else if (symmetric) {
     u_ = solve::solve_symmetric(K, f, solver_report_);
   } else {
@@ -294,7 +313,7 @@ void EfgAnalysis::galerkin_energies() {
     }
     reactions_[i] = r;
   }
-  energy_internal_ = 0.5 * (u_.dot(Ku) - constraint_energy);
+  energy_internal_ = 0.5 * (comm_.sum(u_.dot(Ku)) - constraint_energy);  // several ranks: K is the sum of their shares
   if (projection_) nodal_pressure_ = projection_->lambda.cwiseProduct(projection_->nodal_divergence(u_));
   Real reaction_work = 0.0;
   for (std::size_t i = 0; i < constraint_points_.size(); ++i) reaction_work += reactions_[i].dot(constraint_points_[i].value);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/linear_solver_choice.hpp"
 #include "core/point_cloud.hpp"
 #include "core/probe.hpp"
 #include "geometry/expression.hpp"
@@ -47,6 +48,7 @@ enum class IntegrationCorrection { none, vci };
 
 struct EfgOptions {
   Formulation formulation = Formulation::galerkin;
+  LinearSolverChoice solver;                    // the case's `solver:` (galerkin: CHOLMOD or PETSc)
   WeightedLeastSquaresOptions least_squares;
   mls::MlsOptions mls;
   std::optional<std::array<int, 3>> cells;      // background cells per parametric axis (none: from the nodes)

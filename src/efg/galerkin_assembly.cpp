@@ -113,7 +113,7 @@ Eigen::Matrix3Xd vci_correction(const VolumeIntegrals& volume, const Eigen::Matr
 
 VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::BlockPattern& pattern, Real* values, Eigen::VectorXd& f) {
   const VolumeQuadrature& quadrature = *in.quadrature;
-  const Index cells = static_cast<Index>(quadrature.cell_begin.size()) - 1;
+  Index cells = static_cast<Index>(quadrature.cell_begin.size()) - 1;
   const Index n_nodes = in.shapes->node_count();
   const bool symmetric = pattern.symmetric();
   const int threads = omp_get_max_threads();
@@ -143,6 +143,11 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       }
       return false;
     });
+  }
+  if (in.parts > 1) {  // this part's slab of the ordered cells
+    const Index first = cells * in.part / in.parts, last = cells * (in.part + 1) / in.parts;
+    order = std::vector<Index>(order.begin() + first, order.begin() + last);
+    cells = last - first;
   }
   // phase p of thread t: cells order[bounds[3t + p] .. bounds[3t + p + 1])
   std::vector<Index> bounds;

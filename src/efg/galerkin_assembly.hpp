@@ -67,6 +67,9 @@ struct VolumeAssembly {
   const VolumeQuadrature* reduced = nullptr;
   const std::vector<int>* material_of_reduced_point = nullptr;
   const Eigen::Matrix3Xd* vci_reduced = nullptr;                  // xi_I of the reduced rule (with vci)
+  /// Distributed assembly: this call adds the cells of slab `part` of `parts` (contiguous slabs of the
+  /// cells sorted along the body's longest axis); the parts of all ranks add up to the whole.
+  int part = 0, parts = 1;
 };
 
 struct VolumeAssemblyReport {

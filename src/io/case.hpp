@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/linear_solver_choice.hpp"
 #include "core/ramp.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
@@ -82,6 +83,7 @@ struct Case {
   std::vector<model::Load> loads;
   std::vector<ProbeEntry> probes;
   OutputOptions output;
+  LinearSolverChoice solver;   // `solver:` (efg, mpfem)
   YAML::Node method_section;   // the `<method>:` mapping (may be undefined)
   YAML::Node resolved;         // the whole document after --set overrides (for check / log)
   /// A case built in code (OMLL deck): key path -> line, column in `file` (io/omll_deck.hpp).

@@ -612,6 +612,22 @@ Case CaseReader::read() {
     o.reject_unknown_keys();
   }
 
+  // solver (PRODUCT.md section 5): the linear solves of efg and mpfem
+  NodeReader sv = root.child("solver");
+  if (sv.defined() && sv.expect_map()) {
+    const std::string type = sv.word("type", {"cholmod", "mumps", "cg"}, std::string("cholmod"));
+    c.solver.type = type == "mumps" ? LinearSolverChoice::Type::mumps
+                    : type == "cg"  ? LinearSolverChoice::Type::cg
+                                    : LinearSolverChoice::Type::cholmod;
+    if (!sv.has("type")) c.solver.type = LinearSolverChoice::Type::automatic;
+    c.solver.preconditioner = sv.word("preconditioner", {"gamg", "hypre"}, std::string("gamg")) == "hypre"
+                                  ? LinearSolverChoice::Preconditioner::hypre
+                                  : LinearSolverChoice::Preconditioner::gamg;
+    c.solver.relative_tolerance = sv.real("tolerance", 1e-10, 0.0, 1.0, true);
+    c.solver.max_iterations = static_cast<int>(sv.integer("max_iterations", 10000, 1, 100000000));
+    sv.reject_unknown_keys();
+  }
+
   // the method's other top-level sections (mpm: shell, pd: imperfection) are read by its own reader
   if (keys)
     for (const auto& other : keys->other_sections) (void)root.child(other);

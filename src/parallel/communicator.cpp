@@ -9,6 +9,10 @@ namespace lamina::parallel {
 
 namespace {
 bool mpi_started = false;
+std::vector<std::function<void()>>& finalize_hooks() {
+  static std::vector<std::function<void()>> hooks;
+  return hooks;
+}
 
 bool launched_by_mpirun() {
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
@@ -27,6 +31,9 @@ Environment::Environment(int& argc, char**& argv) {
 }
 
 Environment::~Environment() {
+  auto& hooks = finalize_hooks();
+  for (auto it = hooks.rbegin(); it != hooks.rend(); ++it) (*it)();
+  hooks.clear();
   if (!mpi_started) return;
   int finalized = 0;
   MPI_Finalized(&finalized);
@@ -34,6 +41,8 @@ Environment::~Environment() {
 }
 
 bool Environment::started() { return mpi_started; }
+
+void Environment::before_finalize(std::function<void()> hook) { finalize_hooks().push_back(std::move(hook)); }
 
 Communicator::Communicator() {
   if (!mpi_started) return;

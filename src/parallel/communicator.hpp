@@ -3,6 +3,7 @@
 // with no MPI call at all) and the few collective operations the families need: sums, maxima,
 // gathers and broadcasts. Reductions are plain MPI_Allreduce: their result depends on the rank count
 // in the last bits only (docs/scaling.md).
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,9 @@ class Environment {
   Environment& operator=(const Environment&) = delete;
   /// Whether MPI was started by this environment.
   static bool started();
+  /// Called (last registered first) when the environment ends, before MPI_Finalize: libraries on top
+  /// of MPI (PETSc) finalize there.
+  static void before_finalize(std::function<void()> hook);
 };
 
 class Communicator {

@@ -46,6 +46,7 @@ class PeridynamicAnalysis : public Analysis {
   Real probe(const Probe& probe) const override;
   std::map<std::string, Real> builtin_probes() const override;
   OutputFrame frame() const override;
+  bool frame_is_rank_piece() const override { return ranks_ != nullptr; }
   RunCounts counts() const override;
   std::map<std::string, Real> timings() const override { return timings_; }
   /// quasi_static and explicit runs write checkpoints (after each increment / step).

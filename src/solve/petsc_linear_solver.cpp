@@ -1,0 +1,183 @@
+#include "solve/petsc_linear_solver.hpp"
+
+#include <fmt/format.h>
+#include <petscksp.h>
+
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/stopwatch.hpp"
+
+namespace lamina::solve {
+
+namespace {
+
+/// PETSc, started once per process (on MPI_COMM_WORLD, which lamina's Environment started when
+/// there are several ranks; PETSc starts a one-process MPI itself otherwise) and finalized at exit.
+void ensure_petsc() {
+  static bool started = false;
+  if (started) return;
+  PetscBool initialised = PETSC_FALSE;
+  PetscInitialized(&initialised);
+  if (!initialised) {
+    PetscOptionsSetValue(nullptr, "-options_left", "false");
+    if (PetscInitializeNoArguments() != 0) throw AnalysisError("PETSc could not be initialised");
+    // before lamina's MPI_Finalize (parallel::Environment), or at exit where there is none (Python)
+    static const auto finalize = [] {
+      PetscBool finalized = PETSC_FALSE;
+      PetscFinalized(&finalized);
+      if (!finalized) PetscFinalize();
+    };
+    parallel::Environment::before_finalize(finalize);
+    std::atexit([] { finalize(); });
+  }
+  started = true;
+}
+
+void check(PetscErrorCode code, const char* what) {
+  if (code != 0) throw AnalysisError(fmt::format("PETSc: {} failed (error {})", what, static_cast<int>(code)));
+}
+
+}  // namespace
+
+Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                                      const parallel::Communicator& comm, SolverReport& report) {
+  ensure_petsc();
+  const auto start = Clock::now();
+  const PetscInt n = static_cast<PetscInt>(upper.rows());
+  const int ranks = comm.size(), rank = comm.rank();
+  const PetscInt first = n * rank / ranks, last = n * (rank + 1) / ranks;
+  // preallocation: the rows this rank owns, counted over every rank's shares would need a
+  // communication; an upper bound from this rank's share of its own rows (both triangles) and a
+  // tolerant allocation for what the others add
+  Mat a;
+  check(MatCreate(PETSC_COMM_WORLD, &a), "MatCreate");
+  check(MatSetSizes(a, last - first, last - first, n, n), "MatSetSizes");
+  check(MatSetType(a, MATAIJ), "MatSetType");
+  {
+    std::vector<PetscInt> diagonal(static_cast<std::size_t>(last - first), 0), off(static_cast<std::size_t>(last - first), 0);
+    for (Index col = 0; col < upper.outerSize(); ++col)
+      for (SparseMatrix::InnerIterator it(upper, col); it; ++it) {
+        const Index r = it.row();
+        auto count = [&](Index row, Index c) {
+          if (row < first || row >= last) return;
+          auto& bucket = (c >= first && c < last) ? diagonal : off;
+          ++bucket[static_cast<std::size_t>(row - first)];
+        };
+        count(r, col);
+        if (r != col) count(col, r);
+      }
+    // every rank's shares have the same pattern when they come from one block pattern (efg, mpfem): the
+    // local count is the row's count
+    check(MatMPIAIJSetPreallocation(a, 0, diagonal.data(), 0, off.data()), "MatMPIAIJSetPreallocation");
+    check(MatSeqAIJSetPreallocation(a, 0, diagonal.data()), "MatSeqAIJSetPreallocation");
+    check(MatSetOption(a, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE), "MatSetOption");
+  }
+  for (Index col = 0; col < upper.outerSize(); ++col)
+    for (SparseMatrix::InnerIterator it(upper, col); it; ++it) {
+      const PetscInt r = static_cast<PetscInt>(it.row()), c = static_cast<PetscInt>(col);
+      const PetscScalar v = it.value();
+      if (v == 0.0) continue;
+      check(MatSetValues(a, 1, &r, 1, &c, &v, ADD_VALUES), "MatSetValues");
+      if (r != c) check(MatSetValues(a, 1, &c, 1, &r, &v, ADD_VALUES), "MatSetValues");
+    }
+  check(MatAssemblyBegin(a, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
+  check(MatAssemblyEnd(a, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
+  check(MatSetOption(a, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
+  check(MatSetOption(a, MAT_SPD, PETSC_TRUE), "MatSetOption");
+
+  Vec rhs, x;
+  check(MatCreateVecs(a, &x, &rhs), "MatCreateVecs");
+  {
+    std::vector<PetscInt> rows;
+    std::vector<PetscScalar> values;
+    for (Index i = 0; i < b.size(); ++i)
+      if (b[i] != 0.0) rows.push_back(static_cast<PetscInt>(i)), values.push_back(b[i]);
+    check(VecSetValues(rhs, static_cast<PetscInt>(rows.size()), rows.data(), values.data(), ADD_VALUES), "VecSetValues");
+    check(VecAssemblyBegin(rhs), "VecAssemblyBegin");
+    check(VecAssemblyEnd(rhs), "VecAssemblyEnd");
+  }
+  const Real assembly_seconds = seconds_since(start);
+
+  KSP ksp;
+  PC pc;
+  check(KSPCreate(PETSC_COMM_WORLD, &ksp), "KSPCreate");
+  check(KSPSetOperators(ksp, a, a), "KSPSetOperators");
+  check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  const bool direct = choice.type != LinearSolverChoice::Type::cg;
+  if (direct) {
+    check(KSPSetType(ksp, KSPPREONLY), "KSPSetType");
+    check(PCSetType(pc, PCCHOLESKY), "PCSetType");
+    check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
+    report.method = "petsc_mumps_cholesky";
+  } else {
+    check(KSPSetType(ksp, KSPCG), "KSPSetType");
+    check(KSPSetTolerances(ksp, choice.relative_tolerance, 0.0, PETSC_DEFAULT, choice.max_iterations), "KSPSetTolerances");
+    if (choice.preconditioner == LinearSolverChoice::Preconditioner::hypre) {
+      check(PCSetType(pc, PCHYPRE), "PCSetType");
+      check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
+      report.method = "petsc_cg_hypre_boomeramg";
+    } else {
+      check(PCSetType(pc, PCGAMG), "PCSetType");
+      // three displacement components per node: the block size tells GAMG the unknowns of a node
+      if (n % 3 == 0) check(MatSetBlockSize(a, 3), "MatSetBlockSize");
+      report.method = "petsc_cg_gamg";
+    }
+  }
+  const auto factor_start = Clock::now();
+  check(KSPSetUp(ksp), "KSPSetUp");
+  report.factor_seconds = seconds_since(factor_start);
+  const auto solve_start = Clock::now();
+  check(KSPSolve(ksp, rhs, x), "KSPSolve");
+  report.solve_seconds = seconds_since(solve_start);
+  KSPConvergedReason reason;
+  check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+  PetscInt iterations = 0;
+  KSPGetIterationNumber(ksp, &iterations);
+  if (reason < 0) {
+    KSPDestroy(&ksp);
+    VecDestroy(&x);
+    VecDestroy(&rhs);
+    MatDestroy(&a);
+    throw AnalysisError(fmt::format("PETSc {}: the solve failed ({}, after {} iterations): a singular system (a rigid-body "
+                                    "motion left free) or, for cg, too few iterations",
+                                    report.method, KSPConvergedReasons[reason], static_cast<long>(iterations)));
+  }
+  // residual |A x - b| / |b|
+  Vec residual;
+  check(VecDuplicate(rhs, &residual), "VecDuplicate");
+  check(MatMult(a, x, residual), "MatMult");
+  check(VecAXPY(residual, -1.0, rhs), "VecAXPY");
+  PetscReal rnorm = 0, bnorm = 0;
+  VecNorm(residual, NORM_2, &rnorm);
+  VecNorm(rhs, NORM_2, &bnorm);
+  report.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  report.rows = n;
+  MatInfo info;
+  MatGetInfo(a, MAT_GLOBAL_SUM, &info);
+  report.nonzeros = static_cast<Index>(info.nz_used);
+  report.note = fmt::format("{} ranks, {} iterations, assembly {:.3f} s", ranks, static_cast<long>(iterations), assembly_seconds);
+
+  // the whole solution on every rank
+  Vec all;
+  VecScatter scatter;
+  check(VecScatterCreateToAll(x, &scatter, &all), "VecScatterCreateToAll");
+  check(VecScatterBegin(scatter, x, all, INSERT_VALUES, SCATTER_FORWARD), "VecScatterBegin");
+  check(VecScatterEnd(scatter, x, all, INSERT_VALUES, SCATTER_FORWARD), "VecScatterEnd");
+  Eigen::VectorXd solution(n);
+  const PetscScalar* data = nullptr;
+  check(VecGetArrayRead(all, &data), "VecGetArrayRead");
+  std::copy(data, data + n, solution.data());
+  VecRestoreArrayRead(all, &data);
+  VecScatterDestroy(&scatter);
+  VecDestroy(&all);
+  VecDestroy(&residual);
+  KSPDestroy(&ksp);
+  VecDestroy(&x);
+  VecDestroy(&rhs);
+  MatDestroy(&a);
+  if (!solution.allFinite()) throw AnalysisError("PETSc " + report.method + ": non-finite solution");
+  return solution;
+}
+
+}  // namespace lamina::solve
