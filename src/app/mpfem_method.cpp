@@ -108,6 +108,7 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
   const io::SourceLocation& disc = c.discretization_location;
   mpfem::MpfemProblem p;
   p.options = o.options;
+  p.options.solver = c.solver;
   const auto& g = c.geometry;
   switch (g.type) {
     case geometry::GeometryType::box:
@@ -308,7 +309,8 @@ std::unique_ptr<Analysis> create_mpfem(const io::Case& c, const Model& given, co
 
 MethodEntry mpfem_method_entry() {
   return MethodEntry{io::MethodKeys{"mpfem", {"particles", "jitter"}, true},
-                     "moving particle finite element method, 2D elastostatics, linear and large deformation (seed 001)", read_mpfem, create_mpfem};
+                     "moving particle finite element method, 2D elastostatics, linear and large deformation (seed 001)", read_mpfem, create_mpfem,
+                     {}, /*distributed=*/true};
 }
 
 }  // namespace lamina::app

@@ -268,9 +268,12 @@ RunResult run_case(const RunOptions& options) {
   if (comm.distributed() && !prepared.method->distributed) {
     result.exit_code = 2;
     result.single_process_only = true;
-    result.error = locate(InputError("method", fmt::format("a method that runs on several ranks (pd) for a run on {} ranks; "
+    std::string distributed;
+    for (const auto& m : methods())
+      if (m.distributed) distributed += (distributed.empty() ? "" : ", ") + m.keys.method;
+    result.error = locate(InputError("method", fmt::format("a method that runs on several ranks ({}) for a run on {} ranks; "
                                                            "run this case on one process (without mpirun / --ranks)",
-                                                           comm.size()),
+                                                           distributed, comm.size()),
                                      c.method),
                           c)
                        .what();

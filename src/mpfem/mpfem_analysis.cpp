@@ -16,6 +16,7 @@
 #include "mpfem/gradient_list.hpp"
 #include "mpfem/strain_fit.hpp"
 #include "mpfem/triangle_strain.hpp"
+#include "solve/petsc_linear_solver.hpp"
 
 namespace lamina::mpfem {
 
@@ -56,8 +57,11 @@ Real PlaneMaterial::out_of_plane(const Eigen::Vector3d& strain) const {
   return elastic.lambda() * (strain[0] + strain[1]);
 }
 
-MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes)
-    : problem_(std::move(problem)), probes_(std::move(probes)) {
+MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes, const parallel::Communicator& comm)
+    : problem_(std::move(problem)), probes_(std::move(probes)), comm_(comm) {
+  if (comm_.distributed() && problem_.options.solver.type == LinearSolverChoice::Type::cholmod)
+    throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} ranks (cholmod runs on one process)", comm_.size()),
+                            "cholmod");
   const auto start = Clock::now();
   const Index n = problem_.layout.positions.cols();
   if (problem_.materials.empty()) throw InputError("materials", "at least one linear_elastic material", "none");
@@ -367,6 +371,15 @@ void MpfemAnalysis::assemble_linear() {
   f_ = load_vector();
 }
 
+Eigen::VectorXd MpfemAnalysis::solve_system(const solve::SparseMatrix& upper, const Eigen::VectorXd& rhs,
+                                            const solve::SolverOptions& options, bool positive_definite) {
+  const auto type = problem_.options.solver.type;
+  if (comm_.distributed() || type == LinearSolverChoice::Type::mumps || type == LinearSolverChoice::Type::cg)
+    return solve::solve_symmetric_petsc(upper, rhs, problem_.options.solver, comm_, solver_report_,
+                                        solve::SystemShares::replicated, positive_definite, 2);
+  return solve::solve_symmetric(upper, rhs, solver_report_, options);
+}
+
 void MpfemAnalysis::solve_linear() {
   const Index n = problem_.layout.positions.cols();
   // essential conditions: eliminate the prescribed particle dofs
@@ -388,7 +401,7 @@ void MpfemAnalysis::solve_linear() {
       solve::SolverOptions solver;
       solver.min_rcond = 1e-13;
       solver.allow_fallback = false;
-      uf = solve::solve_symmetric(k, rhs, solver_report_, solver);
+      uf = solve_system(k, rhs, solver, true);
     } catch (const AnalysisError& e) {
       throw AnalysisError(std::string(e.what()) +
                           " (mpfem: fix enough particle dofs (boundary: fix / displacement) to remove the rigid-body "

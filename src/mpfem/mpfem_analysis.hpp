@@ -47,6 +47,7 @@
 #include "mpfem/particle_elements.hpp"
 #include "mpfem/tributary_cells.hpp"
 #include "mpfem/voronoi_cells.hpp"
+#include "parallel/communicator.hpp"
 #include "solve/sparse_linear_solver.hpp"
 
 namespace lamina::mpfem {
@@ -54,7 +55,10 @@ namespace lamina::mpfem {
 class MpfemAnalysis : public Analysis {
  public:
   /// Builds the particle elements (InputError for degenerate particle sets) and checks probes.
-  MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes);
+  /// On several ranks every rank builds and assembles the whole (2D) model and PETSc solves the
+  /// systems, each rank passing its block of rows (solver: mumps by default there, or cg).
+  MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes,
+                const parallel::Communicator& comm = parallel::Communicator::world());
 
   std::string method() const override { return "mpfem"; }
   void run(OutputSink& sink) override;
@@ -128,8 +132,13 @@ class MpfemAnalysis : public Analysis {
   std::vector<Triangle> error_triangles() const;
   std::vector<Triangle> grid_triangles() const;
 
+  /// The solve of the linear systems: CHOLMOD, or PETSc (several ranks or solver: mumps | cg).
+  Eigen::VectorXd solve_system(const solve::SparseMatrix& upper, const Eigen::VectorXd& rhs,
+                               const solve::SolverOptions& options, bool positive_definite);
+
   MpfemProblem problem_;
   std::vector<Probe> probes_;
+  const parallel::Communicator& comm_;
   ParticleDiscretization discretization_;
   bool cell_strain_ = false;
   TributaryCells cells_;

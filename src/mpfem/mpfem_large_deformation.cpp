@@ -227,7 +227,7 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
         solve::SolverOptions solver;
         solver.min_rcond = 1e-13;
         solver.allow_fallback = true;  // the tangent may be indefinite away from equilibrium
-        du = solve::solve_symmetric(k, -residual, solver_report_, solver);
+        du = solve_system(k, -residual, solver, false);
       } catch (const AnalysisError& e) {
         failure = std::string("the tangent system could not be solved: ") + e.what();
         return false;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/linear_solver_choice.hpp"
 #include "core/prescribed_dof.hpp"
 #include "core/types.hpp"
 #include "geometry/expression.hpp"
@@ -49,6 +50,8 @@ struct LargeDeformationOptions {
 
 struct MpfemOptions {
   MpfemAnalysisKind analysis = MpfemAnalysisKind::linear_static;
+  LinearSolverChoice solver;  // the case's `solver:`: CHOLMOD, or PETSc (several ranks: the whole system on
+                              // every rank, each passing the rows of its block)
   LargeDeformationOptions large_deformation;
   PlaneKind plane = PlaneKind::stress;
   ElementKind element = ElementKind::five_node;

@@ -41,19 +41,24 @@ void check(PetscErrorCode code, const char* what) {
 }  // namespace
 
 Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
-                                      const parallel::Communicator& comm, SolverReport& report) {
+                                      const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
+                                      bool positive_definite, int dofs_per_node) {
   ensure_petsc();
   const auto start = Clock::now();
   const PetscInt n = static_cast<PetscInt>(upper.rows());
   const int ranks = comm.size(), rank = comm.rank();
-  const PetscInt first = n * rank / ranks, last = n * (rank + 1) / ranks;
-  // preallocation: the rows this rank owns, counted over every rank's shares would need a
-  // communication; an upper bound from this rank's share of its own rows (both triangles) and a
-  // tolerant allocation for what the others add
+  const PetscInt block = n % dofs_per_node == 0 ? dofs_per_node : 1, nodes = n / block;
+  const PetscInt first = block * (nodes * rank / ranks), last = block * (nodes * (rank + 1) / ranks);
+  // a replicated system: this rank passes the entries of its rows only
+  auto passes = [&](Index row) { return shares == SystemShares::summed || (row >= first && row < last); };
+  // preallocation of the rows this rank owns from the pattern it holds: exact when every rank holds
+  // the same pattern (one block pattern with summed shares, or a replicated system); more entries from
+  // other ranks are still accepted (MAT_NEW_NONZERO_ALLOCATION_ERR off)
   Mat a;
   check(MatCreate(PETSC_COMM_WORLD, &a), "MatCreate");
   check(MatSetSizes(a, last - first, last - first, n, n), "MatSetSizes");
   check(MatSetType(a, MATAIJ), "MatSetType");
+  check(MatSetBlockSize(a, block), "MatSetBlockSize");
   {
     std::vector<PetscInt> diagonal(static_cast<std::size_t>(last - first), 0), off(static_cast<std::size_t>(last - first), 0);
     for (Index col = 0; col < upper.outerSize(); ++col)
@@ -77,14 +82,14 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
     for (SparseMatrix::InnerIterator it(upper, col); it; ++it) {
       const PetscInt r = static_cast<PetscInt>(it.row()), c = static_cast<PetscInt>(col);
       const PetscScalar v = it.value();
-      if (v == 0.0) continue;
+      if (v == 0.0 || !passes(r)) continue;
       check(MatSetValues(a, 1, &r, 1, &c, &v, ADD_VALUES), "MatSetValues");
       if (r != c) check(MatSetValues(a, 1, &c, 1, &r, &v, ADD_VALUES), "MatSetValues");
     }
   check(MatAssemblyBegin(a, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
   check(MatAssemblyEnd(a, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
   check(MatSetOption(a, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
-  check(MatSetOption(a, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  check(MatSetOption(a, MAT_SPD, positive_definite ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
 
   Vec rhs, x;
   check(MatCreateVecs(a, &x, &rhs), "MatCreateVecs");
@@ -92,7 +97,7 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
     std::vector<PetscInt> rows;
     std::vector<PetscScalar> values;
     for (Index i = 0; i < b.size(); ++i)
-      if (b[i] != 0.0) rows.push_back(static_cast<PetscInt>(i)), values.push_back(b[i]);
+      if (b[i] != 0.0 && passes(i)) rows.push_back(static_cast<PetscInt>(i)), values.push_back(b[i]);
     check(VecSetValues(rhs, static_cast<PetscInt>(rows.size()), rows.data(), values.data(), ADD_VALUES), "VecSetValues");
     check(VecAssemblyBegin(rhs), "VecAssemblyBegin");
     check(VecAssemblyEnd(rhs), "VecAssemblyEnd");
@@ -119,8 +124,6 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
       report.method = "petsc_cg_hypre_boomeramg";
     } else {
       check(PCSetType(pc, PCGAMG), "PCSetType");
-      // three displacement components per node: the block size tells GAMG the unknowns of a node
-      if (n % 3 == 0) check(MatSetBlockSize(a, 3), "MatSetBlockSize");
       report.method = "petsc_cg_gamg";
     }
   }

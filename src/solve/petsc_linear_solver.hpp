@@ -10,9 +10,17 @@
 
 namespace lamina::solve {
 
+/// How the ranks hold the system: each a share that the shares add up to (summed), or each the whole
+/// system (replicated: each rank then passes the rows of its block).
+enum class SystemShares { summed, replicated };
+
 /// Throws AnalysisError when PETSc reports a failure (a singular matrix, CG not converged).
-Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper_share, const Eigen::VectorXd& b_share,
-                                      const LinearSolverChoice& choice, const parallel::Communicator& comm,
-                                      SolverReport& report);
+/// positive_definite: MUMPS Cholesky for SPD matrices, else its symmetric-indefinite LDL^T.
+/// dofs_per_node: the unknowns of a node (the rows are split between the ranks by whole nodes, and
+/// GAMG aggregates node blocks).
+Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                                      const parallel::Communicator& comm, SolverReport& report,
+                                      SystemShares shares = SystemShares::summed, bool positive_definite = true,
+                                      int dofs_per_node = 3);
 
 }  // namespace lamina::solve
