@@ -344,8 +344,11 @@ RunResult run_case(const RunOptions& options) {
       return result;
     }
   } else if ((c.output.checkpoint_every > 0 || c.output.checkpoint_seconds > 0) && !analysis->can_checkpoint()) {
-    warnings.push_back(fmt::format("output.checkpoint is ignored: a {} analysis of this kind has no incremental state",
-                                   c.method));
+    warnings.push_back(comm.distributed()
+                           ? fmt::format("output.checkpoint is ignored on {} ranks (checkpoints of distributed runs are "
+                                         "not implemented yet)", comm.size())
+                           : fmt::format("output.checkpoint is ignored: a {} analysis of this kind has no incremental state",
+                                         c.method));
   }
 
   result.output_directory = options.output_directory.empty() ? std::filesystem::path("out") / c.stem
