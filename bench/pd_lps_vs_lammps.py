@@ -48,7 +48,9 @@ def directed_bonds(n):
     return total
 
 
-def run_lammps(n, steps, ranks, workdir):
+def run_lammps(n, steps, ranks, workdir, nx=None):
+    """LAMMPS peri/lps on an nx x n x n lattice (nx = n: the cube) on `ranks` MPI ranks."""
+    nx = n if nx is None else nx
     bulk = E / (3 * (1 - 2 * NU))
     shear = E / (2 * (1 + NU))
     deck = f"""units si
@@ -56,7 +58,7 @@ boundary s s s
 atom_style peri
 atom_modify map array
 lattice sc {SPACING}
-region box block 0 {n - 1} 0 {n - 1} 0 {n - 1}
+region box block 0 {nx - 1} 0 {n - 1} 0 {n - 1}
 create_box 1 box
 create_atoms 1 region box
 pair_style peri/lps
@@ -71,10 +73,10 @@ timestep 1.0e-8
 thermo {steps}
 run {steps}
 """
-    path = os.path.join(workdir, f"in_{n}_{ranks}.lps")
+    path = os.path.join(workdir, f"in_{nx}x{n}_{ranks}.lps")
     with open(path, "w") as f:
         f.write(deck)
-    log = os.path.join(workdir, f"log_{n}_{ranks}.lammps")
+    log = os.path.join(workdir, f"log_{nx}x{n}_{ranks}.lammps")
     cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), "lmp", "-in", path, "-log", log,
            "-screen", "none"]
     env = dict(os.environ, OMP_NUM_THREADS="1")
@@ -86,14 +88,15 @@ run {steps}
     return {"loop_s": float(m.group(1)), "atoms": int(m.group(4))}
 
 
-def run_lamina(lamina, n, steps, threads, workdir, storage="auto"):
-    """lamina explicit run on the same lattice, written with PRODUCT.md's case keys."""
-    extent = n * SPACING  # nodes at cell centres: n cells of size a per direction
+def run_lamina(lamina, n, steps, threads, workdir, storage="auto", nx=None, ranks=1):
+    """lamina explicit run on the same lattice (nx x n x n, nx = n: the cube), written with PRODUCT.md's
+    case keys, on `ranks` MPI ranks (lamina run --ranks) of `threads` threads."""
+    nx = n if nx is None else nx
     dt = 1.0e-8
-    case = f"""title: LPS cube for the LAMMPS side-by-side benchmark
+    case = f"""title: LPS block for the LAMMPS side-by-side benchmarks
 method: pd
 materials: [{{name: m, model: linear_elastic, E: {E}, nu: {NU}, density: {DENSITY}}}]
-geometry: {{type: box, min: [0, 0, 0], max: [{extent}, {extent}, {extent}]}}
+geometry: {{type: box, min: [0, 0, 0], max: [{nx * SPACING}, {n * SPACING}, {n * SPACING}]}}
 discretization: {{spacing: [{SPACING}, {SPACING}, {SPACING}], horizon_factor: {HORIZON_FACTOR}}}
 loads:
   - select: all
@@ -106,21 +109,27 @@ pd:
   explicit: {{end_time: {steps * dt}, time_step: {dt}, outputs: 1}}
 output: {{vtu: false}}
 """
-    path = os.path.join(workdir, f"lamina_{n}_{threads}_{storage}.yaml")
+    tag = f"{nx}x{n}_{ranks}r{threads}t_{storage}"
+    path = os.path.join(workdir, f"lamina_{tag}.yaml")
     with open(path, "w") as f:
         f.write(case)
-    out = os.path.join(workdir, f"lamina_{n}_{threads}_{storage}")
+    out = os.path.join(workdir, f"lamina_{tag}")
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    proc = subprocess.Popen([lamina, "run", path, "-o", out, "--quiet"], env=env)
+    command = [lamina, "run", path, "-o", out, "--quiet", "--threads", str(threads)]
+    if ranks > 1:
+        command += ["--ranks", str(ranks)]
+    proc = subprocess.Popen(command, env=env)
     _, status, usage = os.wait4(proc.pid, 0)
     if os.waitstatus_to_exitcode(status) != 0:
         raise RuntimeError(f"lamina exited with {os.waitstatus_to_exitcode(status)}")
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     timing = summary["timing"]
+    # peak memory: the process (one rank), or the ranks' peaks summed (summary.json memory)
+    peak = usage.ru_maxrss * 1024.0 if ranks == 1 else summary["memory"]["peak_bytes"]
     return {"loop_s": timing["stage_explicit_loop_s"] if "stage_explicit_loop_s" in timing
-            else timing["explicit_loop_s"], "atoms": summary["counts"]["nodes"],
-            "peak_bytes": usage.ru_maxrss * 1024.0, "bonds": timing.get("bonds", timing.get("stage_bonds"))}
+            else timing["explicit_loop_s"], "atoms": summary["counts"]["nodes"], "nodes": summary["counts"]["nodes"],
+            "peak_bytes": peak, "bonds": timing.get("bonds", timing.get("stage_bonds"))}
 
 
 def main():

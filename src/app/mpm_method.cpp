@@ -205,7 +205,7 @@ std::unique_ptr<Analysis> create_mpm(const io::Case& c, const Model& model, cons
 MethodEntry mpm_method_entry() {
   return MethodEntry{io::MethodKeys{"mpm", {"elements", "grid"}, true, {"shell"}, {"grid"}},
                      "CPDI2 material point method with Belytschko-Tsay shell domains, explicit / quasi-static (seed 000)",
-                     read_mpm, create_mpm, {"mpm.end_time"}};
+                     read_mpm, create_mpm, {"mpm.end_time"}, /*distributed=*/true};
 }
 
 }  // namespace lamina::app

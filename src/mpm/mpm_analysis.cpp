@@ -21,8 +21,8 @@ Real field_value(const geometry::ScalarField& f, const geometry::Expression* e, 
 
 MpmAnalysis::~MpmAnalysis() = default;
 
-MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
-    : problem_(std::move(problem)), probes_(std::move(probes)), grid_(Vec3::Zero(), 1.0) {
+MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const parallel::Communicator& comm)
+    : problem_(std::move(problem)), probes_(std::move(probes)), comm_(comm), grid_(Vec3::Zero(), 1.0) {
   const ShellMesh& mesh = problem_.mesh;
   const MpmOptions& o = problem_.options;
   const material::MaterialSpec& m = problem_.material;
@@ -133,7 +133,15 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes)
   energy_.kinetic = energy_.initial_kinetic = 0.5 * (v_.colwise().squaredNorm() * dyn_mass_)(0);
 }
 
+void MpmAnalysis::gather_element_state() {
+  if (!comm_.distributed()) return;
+  const Index e_count = problem_.mesh.element_count();
+  comm_.all_gather_blocks(stress_.data(), static_cast<int>(stress_.rows()), e_count);
+  comm_.all_gather_blocks(hourglass_.data(), static_cast<int>(hourglass_.rows()), e_count);
+}
+
 void MpmAnalysis::compute_fictitious_masses() {
+  gather_element_state();
   stiffness_proportional_masses(*element_, problem_.mesh, x_, stress_, hourglass_, thickness_, incidence_begin_, incidence_,
                                 dyn_mass_, dyn_inertia_);
   node_mass_.resize(3, 0);  // the grid's copy is rebuilt from the new masses
@@ -173,11 +181,13 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
   const ShellMesh& mesh = problem_.mesh;
   const Index e_count = mesh.element_count();
   Index bad = -1;
+  // several ranks: this rank's block of the elements (all of them on one process)
+  const Index e_first = comm_.block_begin(e_count, comm_.rank()), e_last = comm_.block_begin(e_count, comm_.rank() + 1);
   // mid-step configuration x^{n-1/2}: the chord velocity of a finite rigid rotation is a rigid
   // velocity field there (no spurious strain), and the strain increments integrate to second order
   x_mid_ = x_ - 0.5 * dt_stress * vpos_;
-#pragma omp parallel for schedule(static) reduction(max : bad) if (e_count > 256)
-  for (Index e = 0; e < e_count; ++e) {
+#pragma omp parallel for schedule(static) reduction(max : bad) if (e_last - e_first > 256)
+  for (Index e = e_first; e < e_last; ++e) {
     shell::NodeMatrix x, v, w;
     for (int a = 0; a < 4; ++a) {
       const Index node = mesh.quads(a, e);
@@ -197,6 +207,15 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
     element_length_[e] = r.characteristic_length;
     element_force_.col(e) = Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.force.data());
     element_moment_.col(e) = Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.moment.data());
+  }
+  if (comm_.distributed()) {  // every rank: every element's results (the same bits as one process)
+    bad = static_cast<Index>(comm_.max(static_cast<Real>(bad)));
+    comm_.all_gather_blocks(element_force_.data(), 12, e_count);
+    comm_.all_gather_blocks(element_moment_.data(), 12, e_count);
+    comm_.all_gather_blocks(element_power_.data(), 1, e_count);
+    comm_.all_gather_blocks(element_hourglass_power_.data(), 1, e_count);
+    comm_.all_gather_blocks(element_length_.data(), 1, e_count);
+    comm_.all_gather_blocks(thickness_.data(), 1, e_count);
   }
   if (bad >= 0)
     throw AnalysisError(fmt::format("element {} became degenerate or inverted at step {} (time {:.6g}): the run is unstable "
@@ -338,6 +357,7 @@ Real MpmAnalysis::node_velocity_limit() const { return 10.0 * wave_speed_; }
 void MpmAnalysis::run(OutputSink& sink) {
   const MpmOptions& o = problem_.options;
   if (!resumed_) {
+    gather_element_state();
     sink.output_point(0, 0.0, 0.0);
     loop_ = RunLoop{};
   }
@@ -376,6 +396,7 @@ void MpmAnalysis::run(OutputSink& sink) {
       level_step_counts_.push_back(static_cast<int>(level_steps));
       sink.progress(static_cast<Real>(level) / o.load_levels,
                     fmt::format("level {}/{} residual {:.2e} steps {}", level, o.load_levels, residual_ratio_, steps_));
+      gather_element_state();
       sink.output_point(steps_, time_, load);
       loop_.level_done = true;  // a checkpoint here resumes at the next level
       sink.safe_point();
@@ -387,6 +408,7 @@ void MpmAnalysis::run(OutputSink& sink) {
       advance(time_ / o.end_time);
       if (steps_ >= o.max_steps) throw AnalysisError(fmt::format("more than {} steps before the end time", o.max_steps));
       if (time_ >= target * (1 - 1e-12)) {
+        gather_element_state();
         sink.output_point(steps_, time_, std::min(1.0, time_ / o.end_time));
         sink.progress(time_ / o.end_time, fmt::format("t {:.4g} dt {:.3g}", time_, dt_));
         ++loop_.next_output;

@@ -37,6 +37,7 @@
 #include "mpm/background_grid.hpp"
 #include "mpm/cpdi2_domains.hpp"
 #include "mpm/mpm_problem.hpp"
+#include "parallel/communicator.hpp"
 #include "shell/belytschko_tsay_shell.hpp"
 
 namespace lamina::mpm {
@@ -58,7 +59,11 @@ struct EnergyBalance {
 class MpmAnalysis : public Analysis {
  public:
   /// Throws InputError for a bad mesh (defects), a grid too coarse for the elements, bad options.
-  MpmAnalysis(MpmProblem problem, std::vector<Probe> probes);
+  /// On several ranks (element decomposition): each rank updates the shell elements of its block and
+  /// the element results are gathered every step; the nodes, grid and transfers are computed on every
+  /// rank alike, so the result is the one-process result, bit for bit (docs/scaling.md).
+  MpmAnalysis(MpmProblem problem, std::vector<Probe> probes,
+              const parallel::Communicator& comm = parallel::Communicator::world());
   ~MpmAnalysis() override;
 
   std::string method() const override { return "mpm"; }
@@ -73,7 +78,7 @@ class MpmAnalysis : public Analysis {
   /// overshoot), a membrane hourglass coefficient of 0.05 or more with the coefficient springs (stiffens plastic folds).
   std::vector<std::string> warnings() const override;
   /// Checkpoints after any step (docs/restart.md).
-  bool can_checkpoint() const override { return true; }
+  bool can_checkpoint() const override { return !comm_.distributed(); }
   void save_state(StateWriter& out) const override;
   void restore_state(const StateReader& in) override;
 
@@ -99,6 +104,9 @@ class MpmAnalysis : public Analysis {
 
  private:
   void compute_internal_forces(Real dt_stress);
+  /// Several ranks: every element's stress and hourglass state on every rank (each rank advances its
+  /// block only; before outputs and the fictitious-mass refresh).
+  void gather_element_state();
   void prepare_loads();
   void compute_external_forces(Real load);
   void apply_prescribed(Real load);
@@ -136,6 +144,7 @@ class MpmAnalysis : public Analysis {
 
   MpmProblem problem_;
   std::vector<Probe> probes_;
+  const parallel::Communicator& comm_;
   std::unique_ptr<material::ShellMaterial> material_;
   std::unique_ptr<shell::BelytschkoTsayShell> element_;
   BackgroundGrid grid_;

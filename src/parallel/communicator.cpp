@@ -107,6 +107,16 @@ std::vector<Index> Communicator::all_gather_lists(const std::vector<Index>& valu
   return out;
 }
 
+void Communicator::all_gather_blocks(Real* data, int rows, Index count) const {
+  if (!distributed()) return;
+  std::vector<int> counts(static_cast<std::size_t>(size_)), offsets(static_cast<std::size_t>(size_));
+  for (int r = 0; r < size_; ++r) {
+    offsets[static_cast<std::size_t>(r)] = static_cast<int>(rows * block_begin(count, r));
+    counts[static_cast<std::size_t>(r)] = static_cast<int>(rows * (block_begin(count, r + 1) - block_begin(count, r)));
+  }
+  MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, counts.data(), offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+}
+
 std::string Communicator::broadcast(const std::string& value) const {
   if (!distributed()) return value;
   int length = static_cast<int>(value.size());

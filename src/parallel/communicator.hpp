@@ -47,6 +47,11 @@ class Communicator {
   std::vector<int> all_gather(int value) const;
   /// The concatenation of every rank's list, rank order, on every rank.
   std::vector<Index> all_gather_lists(const std::vector<Index>& values) const;
+  /// The block of items [count r / size, count (r + 1) / size) that rank r computes.
+  Index block_begin(Index count, int rank) const { return count * rank / size_; }
+  /// A rows x count column-major array of which each rank filled its block of columns (block_begin):
+  /// afterwards every rank holds all columns. Collective.
+  void all_gather_blocks(Real* data, int rows, Index count) const;
   /// Rank 0's value on every rank.
   std::string broadcast(const std::string& value) const;
   /// Whether every rank passes true.
