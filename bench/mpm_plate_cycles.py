@@ -18,6 +18,22 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def plate_case(elements_x, elements_y, steps, dt):
+    """The benchmark plate: elements_x x elements_y Belytschko-Tsay elements of 0.01 x 0.01 x 0.01, clamped
+    at x = 0, a linear initial velocity, `steps` explicit steps of dt."""
+    return f"""title: MPM plate for the element-cycle benchmarks
+method: mpm
+materials: [{{name: p, model: linear_elastic, E: 1.0e6, nu: 0.3, density: 1.0}}]
+geometry: {{type: plate, min: [0, 0], max: [{elements_x / 100}, {elements_y / 100}], thickness: 0.01}}
+discretization: {{elements: [{elements_x}, {elements_y}]}}
+boundary: [{{select: {{set: xmin}}, fix: [x, y, z, rx, ry, rz]}}]
+loads: [{{select: all, initial_velocity: [0, 0, "0.1*x"]}}]
+shell: {{thickness_points: 3, hourglass: 0.1}}
+mpm: {{analysis: dynamic, end_time: {steps * dt}, output_points: 1, time_step: {{fixed: {dt}}}}}
+output: {{vtu: false}}
+"""
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lamina", default=os.path.join(ROOT, "build", "lamina"))
@@ -29,17 +45,7 @@ def main():
     workdir = tempfile.mkdtemp(prefix="lamina_bench_mpm_")
     case = os.path.join(workdir, "plate.yaml")
     with open(case, "w") as f:
-        f.write(f"""title: MPM plate for the element-cycle benchmark
-method: mpm
-materials: [{{name: p, model: linear_elastic, E: 1.0e6, nu: 0.3, density: 1.0}}]
-geometry: {{type: plate, min: [0, 0], max: [1, 1], thickness: 0.01}}
-discretization: {{elements: [{args.elements}, {args.elements}]}}
-boundary: [{{select: {{set: xmin}}, fix: [x, y, z, rx, ry, rz]}}]
-loads: [{{select: all, initial_velocity: [0, 0, "0.1*x"]}}]
-shell: {{thickness_points: 3, hourglass: 0.1}}
-mpm: {{analysis: dynamic, end_time: {args.steps * dt}, output_points: 1, time_step: {{fixed: {dt}}}}}
-output: {{vtu: false}}
-""")
+        f.write(plate_case(args.elements, args.elements, args.steps, dt))
     elements = args.elements ** 2
     bench = []
     for threads in args.threads:
