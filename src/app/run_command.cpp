@@ -64,7 +64,7 @@ class RunSink : public OutputSink {
  public:
   /// results: the result set on rank 0, null on the other ranks of a distributed run (which write their
   /// VTU pieces into `staging`, rank 0's staging folder).
-  RunSink(const Analysis& analysis, const io::Case& c, const Model& model, io::ResultSet* results, std::filesystem::path staging,
+  RunSink(Analysis& analysis, const io::Case& c, const Model& model, io::ResultSet* results, std::filesystem::path staging,
           ProgressLine& progress, const RunOptions& options, RunResult& result)
       : analysis_(analysis), case_(c), model_(model), results_(results), staging_(std::move(staging)), progress_(progress),
         options_(options), result_(result) {}
@@ -130,9 +130,17 @@ class RunSink : public OutputSink {
 
   void safe_point() override {
     if (!checkpoints_) return;
-    const int signal = stop_signal();
-    const bool due = signal != 0 || (every_ > 0 && outputs_since_checkpoint_ >= every_) ||
-                     (seconds_ > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint_).count() >= seconds_);
+    int signal = stop_signal();
+    bool due = signal != 0 || (every_ > 0 && outputs_since_checkpoint_ >= every_) ||
+               (seconds_ > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint_).count() >= seconds_);
+    const auto& comm = parallel::Communicator::world();
+    if (comm.distributed()) {  // one decision for every rank: any rank's signal or clock
+      std::vector<Real> flags{static_cast<Real>(signal), due ? 1.0 : 0.0};
+      flags[0] = comm.max(flags[0]);
+      flags[1] = comm.max(flags[1]);
+      signal = static_cast<int>(flags[0]);
+      due = flags[1] > 0;
+    }
     if (due) write_checkpoint();
     if (signal != 0) throw RunInterrupted{signal};
   }
@@ -143,6 +151,7 @@ class RunSink : public OutputSink {
     out.put("run.lamina_version", std::string(version));
     out.put("run.case", case_text_);
     out.put("run.threads", omp_get_max_threads());
+    out.put("run.ranks", parallel::Communicator::world().size());
     out.put("run.sequence", ++sequence_);
     out.put("run.output_count", output_count_);
     const Index columns = static_cast<Index>(result_.history_columns.size());
@@ -150,9 +159,16 @@ class RunSink : public OutputSink {
     for (std::size_t r = 0; r < result_.history_rows.size(); ++r)
       for (Index k = 0; k < columns; ++k) history(k, static_cast<Index>(r)) = result_.history_rows[r][static_cast<std::size_t>(k)];
     out.put_matrix("run.history", history);
-    out.put("run.frame_times", results_->frame_times());
+    out.put("run.frame_times", results_ ? results_->frame_times() : std::vector<Real>{});
     out.put("run.last_values", last_values_);
+    analysis_.before_checkpoint();  // several ranks: collective; the state whole on every rank
     analysis_.save_state(out);
+    analysis_.after_checkpoint();
+    if (!results_) {  // rank 0 writes the checkpoint
+      outputs_since_checkpoint_ = 0;
+      last_checkpoint_ = std::chrono::steady_clock::now();
+      return;
+    }
     const auto file = results_->write_checkpoint(sequence_, out.bytes());
     const Index step = result_.history_rows.empty() ? 0 : static_cast<Index>(result_.history_rows.back().front());
     results_->log(fmt::format("checkpoint {} written after output step {} ({} bytes)", file.filename().string(), step,
@@ -171,10 +187,11 @@ class RunSink : public OutputSink {
                                    result_.history_columns.size()));
     for (Index r = 0; r < history.cols(); ++r) {
       std::vector<Real> row(history.col(r).data(), history.col(r).data() + history.rows());
-      results_->history_row(static_cast<Index>(row[0]), row[1], row[2], std::vector<Real>(row.begin() + 3, row.end()));
+      if (results_) results_->history_row(static_cast<Index>(row[0]), row[1], row[2], std::vector<Real>(row.begin() + 3, row.end()));
       result_.history_rows.push_back(std::move(row));
     }
     last_values_ = in.reals("run.last_values");
+    frames_written_ = in.reals("run.frame_times").size();
   }
 
   nlohmann::json probes_json() const {
@@ -186,7 +203,7 @@ class RunSink : public OutputSink {
   }
 
  private:
-  const Analysis& analysis_;
+  Analysis& analysis_;
   const io::Case& case_;
   const Model& model_;
   io::ResultSet* results_;
@@ -279,12 +296,6 @@ RunResult run_case(const RunOptions& options) {
                        .what();
     return result;
   }
-  if (comm.distributed() && !options.restart_directory.empty()) {
-    result.exit_code = 2;
-    result.error = fmt::format("--restart: a run on one process (restarts of runs on {} ranks are not implemented yet)",
-                               comm.size());
-    return result;
-  }
 
   Model model;
   std::unique_ptr<Analysis> analysis;
@@ -320,6 +331,10 @@ RunResult run_case(const RunOptions& options) {
                                 d->current),
                      c);
       }
+      const auto written_ranks = checkpoint.state->has("run.ranks") ? checkpoint.state->integer("run.ranks") : 1;
+      if (written_ranks != comm.size())
+        warnings.push_back(fmt::format("the checkpoint was written by {} ranks, this run has {}: the continued run is not "
+                                       "bit-identical to an uninterrupted one", written_ranks, comm.size()));
       const auto written_threads = checkpoint.state->integer("run.threads");
       if (written_threads != omp_get_max_threads())
         warnings.push_back(fmt::format("the checkpoint was written with {} threads, this run has {}: the continued run "
@@ -329,7 +344,8 @@ RunResult run_case(const RunOptions& options) {
       // the result set the checkpoint continues must still hold the frames it lists
       const auto frame_times = checkpoint.state->reals("run.frame_times");
       for (std::size_t k = 0; k < frame_times.size(); ++k)
-        if (!std::filesystem::exists(checkpoint.file.parent_path() / io::ResultSet::frame_name(k)))
+        if (!std::filesystem::exists(checkpoint.file.parent_path() / io::ResultSet::frame_name(k)) &&
+            !std::filesystem::exists(checkpoint.file.parent_path() / io::ResultSet::parallel_frame_name(k)))
           throw InputError("--restart",
                            fmt::format("the result frames the checkpoint lists ({} VTU files) in {}", frame_times.size(),
                                        checkpoint.file.parent_path().string()),
@@ -344,11 +360,8 @@ RunResult run_case(const RunOptions& options) {
       return result;
     }
   } else if ((c.output.checkpoint_every > 0 || c.output.checkpoint_seconds > 0) && !analysis->can_checkpoint()) {
-    warnings.push_back(comm.distributed()
-                           ? fmt::format("output.checkpoint is ignored on {} ranks (checkpoints of distributed runs are "
-                                         "not implemented yet)", comm.size())
-                           : fmt::format("output.checkpoint is ignored: a {} analysis of this kind has no incremental state",
-                                         c.method));
+    warnings.push_back(fmt::format("output.checkpoint is ignored: a {} analysis of this kind has no incremental state",
+                                   c.method));
   }
 
   result.output_directory = options.output_directory.empty() ? std::filesystem::path("out") / c.stem
@@ -363,7 +376,7 @@ RunResult run_case(const RunOptions& options) {
       if (set) set->log(text);
     }
   } results{result_set.get()};
-  if (restart) {
+  if (restart && result_set) {
     result_set->adopt(checkpoint.file.parent_path(), checkpoint.state->reals("run.frame_times"));
     result_set->remove_stale_staging();
   }

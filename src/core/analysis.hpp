@@ -77,6 +77,10 @@ class Analysis {
   // restore_state before run(), which then continues from the saved step. A restored run repeats the
   // uninterrupted one bit for bit at the same thread count.
   virtual bool can_checkpoint() const { return false; }
+  /// Several ranks: called on every rank around save_state (collective), so that a partitioned analysis
+  /// can hold its state whole for the checkpoint that rank 0 writes, and go back afterwards.
+  virtual void before_checkpoint() {}
+  virtual void after_checkpoint() {}
   virtual void save_state(StateWriter& out) const {}
   /// Throws StateError when the state does not fit this analysis.
   virtual void restore_state(const StateReader& in) {}

@@ -83,7 +83,7 @@ void ResultSet::write_parallel_frame(const OutputFrame& own_piece, Real time, in
   write_piece(staging_, k, 0, own_piece);
   std::vector<std::string> pieces;
   for (int r = 0; r < ranks; ++r) pieces.push_back(piece_name(k, r));
-  const std::string name = fmt::format("frame_{:05d}.pvtu", k);
+  const std::string name = parallel_frame_name(k);
   write_pvtu((staging_ / name).string(), own_piece, pieces);
   frames_.emplace_back(time, name);
   write_pvd((staging_ / "result.pvd").string(), frames_);
@@ -94,6 +94,8 @@ void ResultSet::write_piece(const fs::path& staging, std::size_t k, int rank, co
 }
 
 std::string ResultSet::piece_name(std::size_t k, int rank) { return fmt::format("frame_{:05d}_p{:04d}.vtu", k, rank); }
+
+std::string ResultSet::parallel_frame_name(std::size_t k) { return fmt::format("frame_{:05d}.pvtu", k); }
 
 std::vector<Real> ResultSet::frame_times() const {
   std::vector<Real> times;
@@ -106,7 +108,15 @@ std::string ResultSet::frame_name(std::size_t k) { return fmt::format("frame_{:0
 void ResultSet::adopt(const fs::path& folder, const std::vector<Real>& frame_times) {
   frames_.clear();
   for (std::size_t k = 0; k < frame_times.size(); ++k) {
-    const std::string name = frame_name(k);
+    std::string name = frame_name(k);
+    if (!fs::exists(folder / name) && fs::exists(folder / parallel_frame_name(k))) {
+      name = parallel_frame_name(k);  // a run on several ranks: the .pvtu and its pieces
+      const std::string pieces = fmt::format("frame_{:05d}_p", k);
+      std::error_code ec;
+      for (const auto& entry : fs::directory_iterator(folder, ec))
+        if (entry.path().filename().string().rfind(pieces, 0) == 0)
+          fs::copy_file(entry.path(), staging_ / entry.path().filename(), fs::copy_options::overwrite_existing);
+    }
     if (!fs::exists(folder / name))
       throw std::runtime_error(fmt::format("restart: {} is missing from {}", name, folder.string()));
     fs::copy_file(folder / name, staging_ / name, fs::copy_options::overwrite_existing);

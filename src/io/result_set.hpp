@@ -37,12 +37,15 @@ class ResultSet {
   /// Writes rank `rank`'s piece of frame k into a staging folder (ranks other than 0).
   static void write_piece(const std::filesystem::path& staging, std::size_t k, int rank, const OutputFrame& piece);
   static std::string piece_name(std::size_t k, int rank);
+  /// The parallel file of frame k of a run on several ranks (frame_00000.pvtu, ...).
+  static std::string parallel_frame_name(std::size_t k);
   /// Times of the frames written so far (frame k is frame_<k>.vtu).
   std::vector<Real> frame_times() const;
   /// The file name of VTU frame k (frame_00000.vtu, ...).
   static std::string frame_name(std::size_t k);
-  /// A restart: copy the first frame_times.size() frames and the checkpoints of a folder written by an
-  /// earlier run of the case into the staging folder, and list those frames in result.pvd.
+  /// A restart: copy the first frame_times.size() frames (.vtu, or .pvtu with its pieces) and the
+  /// checkpoints of a folder written by an earlier run of the case into the staging folder, and list
+  /// those frames in result.pvd.
   void adopt(const std::filesystem::path& folder, const std::vector<Real>& frame_times);
   void remove_stale_staging();
   /// checkpoint_<sequence>.bin in the staging folder (io/checkpoint_file.hpp); the newest two are kept.

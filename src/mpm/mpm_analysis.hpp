@@ -78,7 +78,8 @@ class MpmAnalysis : public Analysis {
   /// overshoot), a membrane hourglass coefficient of 0.05 or more with the coefficient springs (stiffens plastic folds).
   std::vector<std::string> warnings() const override;
   /// Checkpoints after any step (docs/restart.md).
-  bool can_checkpoint() const override { return !comm_.distributed(); }
+  bool can_checkpoint() const override { return true; }
+  void before_checkpoint() override { gather_element_state(); }
   void save_state(StateWriter& out) const override;
   void restore_state(const StateReader& in) override;
 

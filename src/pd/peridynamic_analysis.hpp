@@ -51,6 +51,9 @@ class PeridynamicAnalysis : public Analysis {
   std::map<std::string, Real> timings() const override { return timings_; }
   /// quasi_static and explicit runs write checkpoints (after each increment / step).
   bool can_checkpoint() const override;
+  /// Several ranks: the per-node state of the whole body on every rank (rank 0 writes it), and back.
+  void before_checkpoint() override;
+  void after_checkpoint() override;
   void save_state(StateWriter& out) const override;
   void restore_state(const StateReader& in) override;
 
@@ -125,6 +128,12 @@ class PeridynamicAnalysis : public Analysis {
   std::string model_reason_;  // why a 3D body is not a plate lattice (the lattice model applies)
   const parallel::Communicator& comm_;
   std::unique_ptr<RankNodes> ranks_;  // several ranks: this rank's nodes; null on one process
+  /// Several ranks, between before_ and after_checkpoint: the rank's own per-node arrays (the members
+  /// hold the whole body's meanwhile).
+  std::vector<PointMatrix> local_during_checkpoint_;
+  Eigen::VectorXd local_acceleration_during_checkpoint_;
+  PointMatrix whole_body(const PointMatrix& local) const;  // owned columns of every rank, all ranks
+  PointMatrix this_rank(const PointMatrix& whole) const;   // the local columns of a whole-body array
   Eigen::VectorXd owned_dof_;         // several ranks: 1 on the owned dofs, 0 on the halo's
 
   // The loop state between increments / steps (checkpointed with the fields above).

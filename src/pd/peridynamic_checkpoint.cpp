@@ -12,7 +12,6 @@
 namespace lamina::pd {
 
 bool PeridynamicAnalysis::can_checkpoint() const {
-  if (ranks_) return false;  // checkpoints of distributed runs: not yet (docs/scaling.md)
   return problem_.analysis == PdAnalysisKind::quasi_static || problem_.analysis == PdAnalysisKind::explicit_dynamics;
 }
 
@@ -64,10 +63,54 @@ void PeridynamicAnalysis::state_fields(Self& self, Archive& a) {
   }
 }
 
+PointMatrix PeridynamicAnalysis::whole_body(const PointMatrix& local) const {
+  PointMatrix whole = PointMatrix::Zero(local.rows(), ranks_->global_count);
+  for (std::size_t k = 0; k < ranks_->global.size(); ++k)
+    if (ranks_->owns(static_cast<Index>(k))) whole.col(ranks_->global[k]) = local.col(static_cast<Index>(k));
+  std::vector<Real> values(whole.data(), whole.data() + whole.size());
+  comm_.sum(values);  // each column is one rank's (the others add zeros): exact
+  return Eigen::Map<const PointMatrix>(values.data(), whole.rows(), whole.cols());
+}
+
+PointMatrix PeridynamicAnalysis::this_rank(const PointMatrix& whole) const {
+  PointMatrix local(whole.rows(), static_cast<Index>(ranks_->global.size()));
+  for (std::size_t k = 0; k < ranks_->global.size(); ++k) local.col(static_cast<Index>(k)) = whole.col(ranks_->global[k]);
+  return local;
+}
+
+// The per-node arrays a distributed explicit run checkpoints, whole (in global order) while it is written.
+// The local arrays are swapped out (their buffers kept: the explicit loop holds views of them) and swapped
+// back afterwards.
+void PeridynamicAnalysis::before_checkpoint() {
+  if (!ranks_) return;
+  auto& e = explicit_;
+  local_during_checkpoint_.assign(5, PointMatrix());
+  local_acceleration_during_checkpoint_.resize(0);
+  PointMatrix* arrays[] = {&u_, &velocity_, &internal_force_, &external_force_, &e.support_force};
+  for (std::size_t k = 0; k < 5; ++k) {
+    local_during_checkpoint_[k].swap(*arrays[k]);
+    *arrays[k] = whole_body(local_during_checkpoint_[k]);
+  }
+  local_acceleration_during_checkpoint_.swap(e.acceleration);
+  const PointMatrix whole_acceleration = whole_body(
+      Eigen::Map<const PointMatrix>(local_acceleration_during_checkpoint_.data(), 3, local_acceleration_during_checkpoint_.size() / 3));
+  e.acceleration = Eigen::Map<const Eigen::VectorXd>(whole_acceleration.data(), whole_acceleration.size());
+}
+
+void PeridynamicAnalysis::after_checkpoint() {
+  if (!ranks_ || local_during_checkpoint_.empty()) return;
+  PointMatrix* arrays[] = {&u_, &velocity_, &internal_force_, &external_force_, &explicit_.support_force};
+  for (std::size_t k = 0; k < 5; ++k) arrays[k]->swap(local_during_checkpoint_[k]);
+  explicit_.acceleration.swap(local_acceleration_during_checkpoint_);
+  local_during_checkpoint_.clear();
+  local_acceleration_during_checkpoint_.resize(0);
+}
+
 void PeridynamicAnalysis::save_state(StateWriter& out) const {
   out.put("pd.analysis", static_cast<int>(problem_.analysis));
-  out.put("pd.nodes", body_->nodes());
-  out.put("pd.bonds", body_->bonds());
+  // several ranks: the whole body's nodes and bonds (the arrays are whole during a checkpoint)
+  out.put("pd.nodes", ranks_ ? ranks_->global_count : body_->nodes());
+  out.put("pd.bonds", ranks_ && timings_.count("bonds") ? static_cast<Index>(timings_.at("bonds")) : body_->bonds());
   state_fields(*this, out);
   if (problem_.analysis == PdAnalysisKind::explicit_dynamics)  // the energy error of the last output point
     out.put("pd.explicit.energy_error_reported", timings_.count("energy_error") ? timings_.at("energy_error") : std::nan(""));
@@ -75,17 +118,34 @@ void PeridynamicAnalysis::save_state(StateWriter& out) const {
 
 void PeridynamicAnalysis::restore_state(const StateReader& in) {
   if (in.integer("pd.analysis") != static_cast<int>(problem_.analysis)) throw StateError("written by another pd.analysis");
-  if (in.integer("pd.nodes") != body_->nodes() || in.integer("pd.bonds") != body_->bonds())
-    throw StateError(fmt::format("written for {} nodes and {} bonds, this lattice has {} and {}", in.integer("pd.nodes"),
-                                 in.integer("pd.bonds"), body_->nodes(), body_->bonds()));
-  const Index n = body_->nodes();  // the sizes the records must have
+  const Index nodes = ranks_ ? ranks_->global_count : body_->nodes();
+  if (in.integer("pd.nodes") != nodes)
+    throw StateError(fmt::format("written for {} nodes, this lattice has {}", in.integer("pd.nodes"), nodes));
+  if (!ranks_ && in.integer("pd.bonds") != body_->bonds())
+    throw StateError(fmt::format("written for {} bonds, this lattice has {}", in.integer("pd.bonds"), body_->bonds()));
+  const Index n = nodes;  // the sizes the records must have (the whole body's)
   quasi_.previous.resize(3, n);
   quasi_.before_previous.resize(3, n);
   quasi_.third.resize(3, n);
   quasi_.generalized_force.resize(3, n);
   explicit_.acceleration.resize(3 * n);
   explicit_.support_force.resize(3, n);
+  if (ranks_) {
+    u_.resize(3, n);
+    velocity_.resize(3, n);
+    internal_force_.resize(3, n);
+    external_force_.resize(3, n);
+  }
   state_fields(*this, in);
+  if (ranks_) {  // the whole body's arrays: this rank's columns
+    u_ = this_rank(u_);
+    velocity_ = this_rank(velocity_);
+    internal_force_ = this_rank(internal_force_);
+    external_force_ = this_rank(external_force_);
+    const PointMatrix a = this_rank(Eigen::Map<const PointMatrix>(explicit_.acceleration.data(), 3, n));
+    explicit_.acceleration = Eigen::Map<const Eigen::VectorXd>(a.data(), a.size());
+    explicit_.support_force = this_rank(explicit_.support_force);
+  }
   if (problem_.analysis == PdAnalysisKind::quasi_static) model_->update(u_, *state_);
   if (problem_.analysis == PdAnalysisKind::explicit_dynamics)
     if (const Real reported = in.real("pd.explicit.energy_error_reported"); std::isfinite(reported))

@@ -5,6 +5,7 @@
     column's largest magnitude), the counts in summary.json are equal;
   - each VTU frame is a .pvtu of N pieces whose points add up to the body's nodes;
   - the mpm runs (element decomposition) are those of one process, bit for bit;
+  - a pd and an mpm run on 2 ranks restarted from a checkpoint repeat the uninterrupted history bit for bit;
   - a case that runs on one process only (pd ADR) exits 2 on 2 ranks with the reason;
   - efg and mpfem (linear and large deformation) solved through PETSc on 2 and 3 ranks (MUMPS, CG with
     GAMG) give the one-process CHOLMOD probes within 1e-9 (MUMPS) / 1e-6 (CG).
@@ -108,6 +109,31 @@ for case, variants in history_cases:
                 failures.append(f"{label}: {where} differs from one process by {worst:.2e} (tolerance {TOLERANCE:g})")
             if os.path.exists(os.path.join(out, "result.pvd")):
                 check_pieces(out, ranks, counts["nodes"], label)
+
+# checkpoint / restart on 2 ranks: a run with checkpoints, its newest checkpoint removed, --restart from
+# the older one: the history of the uninterrupted run, bit for bit, frames (.pvtu and pieces) kept
+for name in ("block_initial_velocity.yaml", "mpm_plate_dynamic.yaml"):
+    case = os.path.join(case_dir, name)
+    label = f"{name} restart on 2 ranks"
+    full = os.path.join(work, name + "_checkpointed")
+    extra = ["--set", "output.checkpoint.every=3"]
+    r = run(case, 2, full, extra)
+    checkpoints = sorted(f for f in os.listdir(full) if f.startswith("checkpoint_")) if r.returncode == 0 else []
+    if len(checkpoints) < 2:
+        failures.append(f"{label}: exit {r.returncode}, checkpoints {checkpoints}: {r.stderr.strip()}")
+        continue
+    part = os.path.join(work, name + "_restarted")
+    shutil.copytree(full, part)
+    os.remove(os.path.join(part, checkpoints[-1]))
+    r = run(case, 2, part, extra + ["--restart", part])
+    if r.returncode != 0:
+        failures.append(f"{label}: exit {r.returncode}: {r.stderr.strip()}")
+        continue
+    same = open(os.path.join(full, "history.csv")).read() == open(os.path.join(part, "history.csv")).read()
+    frames = sorted(f for f in os.listdir(part) if f.startswith("frame_")) == sorted(f for f in os.listdir(full) if f.startswith("frame_"))
+    print(f"{label}: history {'identical' if same else 'DIFFERENT'}, frames {'complete' if frames else 'MISSING'}")
+    if not same or not frames:
+        failures.append(f"{label}: the restarted run differs (history identical: {same}, frames complete: {frames})")
 
 # cases that run on one process only (pd quasi_static by ADR, another method): exit 2 with the reason,
 # no output folder
