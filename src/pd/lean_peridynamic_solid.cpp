@@ -20,6 +20,7 @@ void LeanPeridynamicSolid::update(const PointMatrix& u, ModelState& state, bool 
   if (s.bond_energy.size() != n) s.bond_energy = Eigen::VectorXd::Zero(n);
   if (components_ == 1) update_kernel<1>(s);
   else update_kernel<3>(s);
+  body_.exchange_halo(s.dilatation_force.data(), 3);  // several ranks: the halo's Q theta from its owners
 }
 
 namespace {

@@ -126,6 +126,7 @@ void LinearPeridynamicSolid::bond_state_kernel(const PointMatrix& u, BondState& 
       s.dilatation_force.col(i) = force;
     }
   }
+  body.exchange_halo(s.dilatation_force.data(), 6);  // several ranks: the halo's Q theta from its owners
   // Stage 2: pair forces P_ij = V_i beta V_j (t_ij + t_ji).
 #pragma omp parallel for schedule(static)
   for (Index i = 0; i < n; ++i) {

@@ -31,6 +31,7 @@
 // layers sit at the Gauss points of the thickness, see geometry/cell_lattice.hpp).
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/types.hpp"
@@ -100,7 +101,18 @@ class PeridynamicBody {
   /// Distributed runs: the role of each node on this rank. The models then compute dilatations for the
   /// owned and inner-halo nodes only, and forces and energies for the owned ones. None set: all owned.
   void set_node_roles(std::vector<NodeRole> roles) { roles_ = std::move(roles); }
-  bool computes_state(Index i) const { return roles_.empty() || roles_[static_cast<std::size_t>(i)] != NodeRole::outer_halo; }
+  /// Distributed runs: a refresh of the halo's columns of a rows x nodes array from their owners. Once set,
+  /// the models compute dilatations on the owned nodes only and take the halo's dilatation forces from it
+  /// (without it: computed here for the inner halo, as the stiffness needs its bond directions).
+  void set_halo_exchange(std::function<void(Real*, int)> exchange) { halo_exchange_ = std::move(exchange); }
+  void exchange_halo(Real* data, int rows) const {
+    if (halo_exchange_) halo_exchange_(data, rows);
+  }
+  bool computes_state(Index i) const {
+    if (roles_.empty()) return true;
+    const NodeRole r = roles_[static_cast<std::size_t>(i)];
+    return r == NodeRole::owned || (r == NodeRole::inner_halo && !halo_exchange_);
+  }
   bool owns(Index i) const { return roles_.empty() || roles_[static_cast<std::size_t>(i)] == NodeRole::owned; }
   bool has_halo() const { return !roles_.empty(); }
 
@@ -172,6 +184,7 @@ class PeridynamicBody {
   Eigen::VectorXd young_, poisson_;
   BodyStatistics statistics_;
   std::vector<NodeRole> roles_;
+  std::function<void(Real*, int)> halo_exchange_;
 };
 
 }  // namespace lamina::pd

@@ -40,6 +40,9 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
       throw AnalysisError(fmt::format("explicit time step {:.4g} exceeds the critical step {:.4g}", dt, critical));
     timings_["critical_time_step"] = critical;
   }
+  // several ranks: from here on the halo's dilatation forces come from their owners (the stiffness above
+  // needed the inner halo's own bond directions)
+  if (ranks_) body_->set_halo_exchange([this](Real* data, int rows) { ranks_->halo.exchange(data, rows); });
   ExplicitLoop& loop = explicit_;
   Index steps = std::max<Index>(1, static_cast<Index>(std::ceil(options.end_time / dt - 1e-9)));
   dt = options.end_time / static_cast<Real>(steps);
