@@ -45,7 +45,9 @@ int info() {
     std::cout << fmt::format("  {:<15} {}{}\n", m.name, m.description, constants.empty() ? "" : " [" + constants + "]");
   }
   std::cout << "features: yaml case files, --set overrides, VTU/PVD output, Gmsh .msh import, muParser expressions,\n"
-               "          MLS shape functions (linear/quadratic, gauss/cubic/quartic spline, box/sphere/nearest/all/variable)\n";
+               "          MLS shape functions (linear/quadratic, gauss/cubic/quartic spline, box/sphere/nearest/all/variable),\n"
+               "          MPI ranks (OpenMPI; lamina run --ranks N: pd explicit partitioned by Zoltan RCB, mpm by elements,\n"
+               "          efg / mpfem through PETSc: solver: mumps | cg with gamg | hypre; docs/scaling.md)\n";
   return 0;
 }
 

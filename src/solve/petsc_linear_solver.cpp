@@ -118,6 +118,8 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
   } else {
     check(KSPSetType(ksp, KSPCG), "KSPSetType");
     check(KSPSetTolerances(ksp, choice.relative_tolerance, 0.0, PETSC_DEFAULT, choice.max_iterations), "KSPSetTolerances");
+    // the tolerance is on |b - K x| / |b| (PETSc's CG would test the preconditioned residual)
+    check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
     if (choice.preconditioner == LinearSolverChoice::Preconditioner::hypre) {
       check(PCSetType(pc, PCHYPRE), "PCSetType");
       check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
