@@ -90,9 +90,6 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const pa
     if (o.essential == EssentialMethod::lagrange)
       throw SingleProcessOnly("efg.essential", fmt::format("penalty or nitsche on {} (lagrange runs on one process)", ranks),
                               "lagrange");
-    if (o.correction == IntegrationCorrection::vci)
-      throw SingleProcessOnly("efg.integration.correction",
-                              fmt::format("none on {} (vci makes the system unsymmetric; one process)", ranks), "vci");
     if (o.solver.type == LinearSolverChoice::Type::cholmod)
       throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} (cholmod runs on one process)", ranks), "cholmod");
   }

@@ -40,9 +40,14 @@ void check(PetscErrorCode code, const char* what) {
 
 }  // namespace
 
-Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
-                                      const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
-                                      bool positive_definite, int dofs_per_node) {
+namespace {
+
+enum class Storage { symmetric_upper, full };
+
+Eigen::VectorXd solve_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                            const parallel::Communicator& comm, SolverReport& report, SystemShares shares, Storage storage,
+                            bool positive_definite, int dofs_per_node) {
+  const bool mirror = storage == Storage::symmetric_upper;  // the lower triangle from the upper one
   ensure_petsc();
   const auto start = Clock::now();
   const PetscInt n = static_cast<PetscInt>(upper.rows());
@@ -70,7 +75,7 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
           ++bucket[static_cast<std::size_t>(row - first)];
         };
         count(r, col);
-        if (r != col) count(col, r);
+        if (mirror && r != col) count(col, r);
       }
     // every rank's shares have the same pattern when they come from one block pattern (efg, mpfem): the
     // local count is the row's count
@@ -84,12 +89,12 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
       const PetscScalar v = it.value();
       if (v == 0.0 || !passes(r)) continue;
       check(MatSetValues(a, 1, &r, 1, &c, &v, ADD_VALUES), "MatSetValues");
-      if (r != c) check(MatSetValues(a, 1, &c, 1, &r, &v, ADD_VALUES), "MatSetValues");
+      if (mirror && r != c) check(MatSetValues(a, 1, &c, 1, &r, &v, ADD_VALUES), "MatSetValues");
     }
   check(MatAssemblyBegin(a, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
   check(MatAssemblyEnd(a, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
-  check(MatSetOption(a, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
-  check(MatSetOption(a, MAT_SPD, positive_definite ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
+  check(MatSetOption(a, MAT_SYMMETRIC, mirror ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
+  check(MatSetOption(a, MAT_SPD, mirror && positive_definite ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
 
   Vec rhs, x;
   check(MatCreateVecs(a, &x, &rhs), "MatCreateVecs");
@@ -112,21 +117,21 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
   const bool direct = choice.type != LinearSolverChoice::Type::cg;
   if (direct) {
     check(KSPSetType(ksp, KSPPREONLY), "KSPSetType");
-    check(PCSetType(pc, PCCHOLESKY), "PCSetType");
+    check(PCSetType(pc, mirror ? PCCHOLESKY : PCLU), "PCSetType");
     check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
-    report.method = "petsc_mumps_cholesky";
+    report.method = mirror ? "petsc_mumps_cholesky" : "petsc_mumps_lu";
   } else {
-    check(KSPSetType(ksp, KSPCG), "KSPSetType");
+    check(KSPSetType(ksp, mirror ? KSPCG : KSPGMRES), "KSPSetType");
     check(KSPSetTolerances(ksp, choice.relative_tolerance, 0.0, PETSC_DEFAULT, choice.max_iterations), "KSPSetTolerances");
     // the tolerance is on |b - K x| / |b| (PETSc's CG would test the preconditioned residual)
     check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
     if (choice.preconditioner == LinearSolverChoice::Preconditioner::hypre) {
       check(PCSetType(pc, PCHYPRE), "PCSetType");
       check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
-      report.method = "petsc_cg_hypre_boomeramg";
+      report.method = mirror ? "petsc_cg_hypre_boomeramg" : "petsc_gmres_hypre_boomeramg";
     } else {
       check(PCSetType(pc, PCGAMG), "PCSetType");
-      report.method = "petsc_cg_gamg";
+      report.method = mirror ? "petsc_cg_gamg" : "petsc_gmres_gamg";
     }
   }
   const auto factor_start = Clock::now();
@@ -183,6 +188,20 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
   MatDestroy(&a);
   if (!solution.allFinite()) throw AnalysisError("PETSc " + report.method + ": non-finite solution");
   return solution;
+}
+
+}  // namespace
+
+Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                                      const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
+                                      bool positive_definite, int dofs_per_node) {
+  return solve_petsc(upper, b, choice, comm, report, shares, Storage::symmetric_upper, positive_definite, dofs_per_node);
+}
+
+Eigen::VectorXd solve_general_petsc(const SparseMatrix& a, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                                    const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
+                                    int dofs_per_node) {
+  return solve_petsc(a, b, choice, comm, report, shares, Storage::full, false, dofs_per_node);
 }
 
 }  // namespace lamina::solve

@@ -1,8 +1,9 @@
 #pragma once
 // K x = b through PETSc (petsc-dev): each rank passes its share of K (a symmetric matrix as the upper
-// triangle of the rank's partial sums, e.g. the contribution of its cells) and of b; PETSc adds the
-// shares into a distributed AIJ matrix (rows in contiguous blocks per rank) and solves with MUMPS
-// (Cholesky) or CG preconditioned by GAMG or hypre BoomerAMG. The solution comes back whole on every
+// triangle of the rank's partial sums, e.g. the contribution of its cells, or an unsymmetric one whole)
+// and of b; PETSc adds the shares into a distributed AIJ matrix (rows in contiguous blocks per rank) and
+// solves with MUMPS (Cholesky / LDL^T / LU) or CG (GMRES when unsymmetric) preconditioned by GAMG or
+// hypre BoomerAMG. The solution comes back whole on every
 // rank. Works on one process too (solver: {type: mumps | cg}).
 #include "parallel/communicator.hpp"
 #include "core/linear_solver_choice.hpp"
@@ -22,5 +23,11 @@ Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::Ve
                                       const parallel::Communicator& comm, SolverReport& report,
                                       SystemShares shares = SystemShares::summed, bool positive_definite = true,
                                       int dofs_per_node = 3);
+
+/// A x = b, A square and unsymmetric, given whole (full storage) per share: MUMPS LU, or (type: cg) GMRES
+/// with the chosen preconditioner.
+Eigen::VectorXd solve_general_petsc(const SparseMatrix& a, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                                    const parallel::Communicator& comm, SolverReport& report,
+                                    SystemShares shares = SystemShares::summed, int dofs_per_node = 3);
 
 }  // namespace lamina::solve
