@@ -136,8 +136,7 @@ class RunSink : public OutputSink {
     const auto& comm = parallel::Communicator::world();
     if (comm.distributed()) {  // one decision for every rank: any rank's signal or clock
       std::vector<Real> flags{static_cast<Real>(signal), due ? 1.0 : 0.0};
-      flags[0] = comm.max(flags[0]);
-      flags[1] = comm.max(flags[1]);
+      comm.max(flags);  // one reduction
       signal = static_cast<int>(flags[0]);
       due = flags[1] > 0;
     }

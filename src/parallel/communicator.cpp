@@ -21,6 +21,11 @@ bool launched_by_mpirun() {
 }
 
 MPI_Datatype index_type() { return sizeof(Index) == 8 ? MPI_INT64_T : MPI_INT32_T; }
+
+void reduce_in_place(std::vector<Real>& values, MPI_Op op) {
+  if (!values.empty())
+    MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, op, MPI_COMM_WORLD);
+}
 }  // namespace
 
 Environment::Environment(int& argc, char**& argv) {
@@ -39,8 +44,6 @@ Environment::~Environment() {
   MPI_Finalized(&finalized);
   if (!finalized) MPI_Finalize();
 }
-
-bool Environment::started() { return mpi_started; }
 
 void Environment::before_finalize(std::function<void()> hook) { finalize_hooks().push_back(std::move(hook)); }
 
@@ -63,8 +66,7 @@ Real Communicator::sum(Real value) const {
 }
 
 void Communicator::sum(std::vector<Real>& values) const {
-  if (!distributed() || values.empty()) return;
-  MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  if (distributed()) reduce_in_place(values, MPI_SUM);
 }
 
 Real Communicator::max(Real value) const {
@@ -72,6 +74,10 @@ Real Communicator::max(Real value) const {
   Real out = 0;
   MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   return out;
+}
+
+void Communicator::max(std::vector<Real>& values) const {
+  if (distributed()) reduce_in_place(values, MPI_MAX);
 }
 
 Index Communicator::sum(Index value) const {
@@ -126,20 +132,9 @@ std::string Communicator::broadcast(const std::string& value) const {
   return out;
 }
 
-bool Communicator::all(bool value) const {
-  if (!distributed()) return value;
-  int in = value ? 1 : 0, out = 0;
-  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  return out == 1;
-}
-
 void Communicator::barrier() const {
   if (distributed()) MPI_Barrier(MPI_COMM_WORLD);
 }
 
-void Communicator::abort(int code) const {
-  if (mpi_started) MPI_Abort(MPI_COMM_WORLD, code);
-  std::exit(code);
-}
 
 }  // namespace lamina::parallel

@@ -20,8 +20,6 @@ class Environment {
   ~Environment();
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
-  /// Whether MPI was started by this environment.
-  static bool started();
   /// Called (last registered first) when the environment ends, before MPI_Finalize: libraries on top
   /// of MPI (PETSc) finalize there.
   static void before_finalize(std::function<void()> hook);
@@ -41,6 +39,8 @@ class Communicator {
   /// Element-wise sums of equal-length vectors on every rank.
   void sum(std::vector<Real>& values) const;
   Real max(Real value) const;
+  /// Element-wise maxima of equal-length vectors on every rank.
+  void max(std::vector<Real>& values) const;
   Index sum(Index value) const;
   /// values of every rank, rank order, on every rank.
   std::vector<Real> all_gather(const std::vector<Real>& values) const;
@@ -54,11 +54,7 @@ class Communicator {
   void all_gather_blocks(Real* data, int rows, Index count) const;
   /// Rank 0's value on every rank.
   std::string broadcast(const std::string& value) const;
-  /// Whether every rank passes true.
-  bool all(bool value) const;
   void barrier() const;
-  /// Stops every rank (an error seen by one rank only, where the others wait in a collective).
-  [[noreturn]] void abort(int code) const;
 
  private:
   Communicator();

@@ -38,6 +38,15 @@ def history(folder):
     return rows[0], [[float(x) for x in r] for r in rows[1:]]
 
 
+def largest_difference(differences):
+    """The largest of (name, relative difference) pairs: (difference, name); (0, '') for none."""
+    worst, where = 0.0, ""
+    for name, d in differences:
+        if d > worst:
+            worst, where = d, name
+    return worst, where
+
+
 def check_pieces(folder, ranks, nodes, label):
     with open(os.path.join(folder, "result.pvd")) as f:
         frames = re.findall(r'file="([^"]+)"', f.read())
@@ -97,13 +106,9 @@ for case, variants in history_cases:
                 continue
             if summary["counts"] != counts or summary.get("ranks") != ranks:
                 failures.append(f"{label}: counts {summary['counts']} ranks {summary.get('ranks')}, one process {counts}")
-            worst, where = 0.0, ""
-            for c, column in enumerate(columns):
-                scale = max(max(abs(row[c]) for row in reference), 1e-300)
-                for a, b in zip(reference, rows):
-                    d = abs(a[c] - b[c]) / scale
-                    if d > worst:
-                        worst, where = d, column
+            scales = [max(max(abs(row[c]) for row in reference), 1e-300) for c in range(len(columns))]
+            worst, where = largest_difference((column, abs(a[c] - b[c]) / scales[c]) for c, column in enumerate(columns)
+                                              for a, b in zip(reference, rows))
             print(f"{label}: largest relative difference to one process {worst:.2e} ({where or '-'})")
             if worst > TOLERANCE:
                 failures.append(f"{label}: {where} differs from one process by {worst:.2e} (tolerance {TOLERANCE:g})")
@@ -172,18 +177,16 @@ for case, extra in static_cases:
             failures.append(f"{label}: exit {r.returncode}: {r.stderr.strip()}")
             continue
         with open(os.path.join(out, "summary.json")) as f:
-            probes = json.load(f)["probes"]
+            summary = json.load(f)
+        probes = summary["probes"]
         scale = max(abs(v) for v in reference.values())
-        worst, where = 0.0, ""
-        for key, value in reference.items():
-            d = abs(probes[key] - value) / max(abs(value), 1e-12 * scale)
-            if d > worst:
-                worst, where = d, key
+        worst, where = largest_difference((key, abs(probes[key] - value) / max(abs(value), 1e-12 * scale))
+                                          for key, value in reference.items())
         print(f"{label}: largest relative probe difference to CHOLMOD {worst:.2e} ({where})")
         if worst > tolerance:
             failures.append(f"{label}: {where} differs from CHOLMOD by {worst:.2e} (tolerance {tolerance:g})")
         if os.path.exists(os.path.join(out, "result.pvd")):
-            check_pieces(out, ranks, json.load(open(os.path.join(out, "summary.json")))["counts"]["nodes"], label)
+            check_pieces(out, ranks, summary["counts"]["nodes"], label)
 
 for f in failures:
     print("FAIL", f)
