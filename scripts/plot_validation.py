@@ -86,14 +86,22 @@ def draw(spec):
 
 
 def read_vtu(path, field):
-    """Points and one point-data array of a lamina VTU file (inline base64 binary, UInt32 byte count)."""
+    """Points and one point-data array of a lamina VTU file (inline base64 binary, UInt32 byte count), or
+    of a .pvtu frame of a run on several ranks (its pieces in order)."""
     import base64
+    import os
     import re
     import struct
 
     import numpy as np
 
     text = open(path).read()
+    if path.endswith(".pvtu"):
+        pieces = [read_vtu(os.path.join(os.path.dirname(path), source), field)
+                  for source in re.findall(r'<Piece Source="([^"]+)"', text)]
+        if not pieces:
+            raise ValueError(f"{path}: no pieces")
+        return np.vstack([p for p, _ in pieces]), np.vstack([v for _, v in pieces])
 
     def decode(block):
         raw = base64.b64decode(block.strip())

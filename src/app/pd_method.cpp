@@ -202,6 +202,7 @@ pd::PeridynamicProblem make_problem(const io::Case& c, const Model& model, const
   p.explicit_options = o.explicit_options;
   p.buckling = o.buckling;
   p.check_zero_energy = o.check_zero_energy;
+  p.solver = c.solver;
   if (!c.discretization.spacing) {
     problem_at(disc, ".spacing", "lattice cell sizes [dx, dy, dz] (method pd)", "nothing");
     throw InputError(problems);

@@ -38,6 +38,7 @@ RelaxationResult AdaptiveDynamicRelaxation::relax(PointMatrix& u, const PointMat
     if (mapped && k > 0) U = coordinates_->to_nodes * q;
     solid_.update(u, *result.state);
     result.internal_force = solid_.internal_force(*result.state);
+    if (complete_force_) complete_force_(result.internal_force);
     const Eigen::Map<const Eigen::VectorXd> fint(result.internal_force.data(), dofs);
     // Stage 2: residual on the free dofs and the convergence test (seed eq (8)).
     Real largest = 0, scale = 0;

@@ -17,6 +17,7 @@
 // The energy dissipated by the fictitious damping, sum c lambda Udot^2 dt, is accumulated.
 // Extension (kinetic_fallback, default on): while c = 0 (negative local stiffness, e.g. during a
 // snap-through) the velocities are zeroed at every peak of the fictitious kinetic energy.
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -51,6 +52,9 @@ class AdaptiveDynamicRelaxation {
   /// increment's own start residual instead of its current, dynamic one); the iteration budget is
   /// max_iterations per call.
   RelaxationResult relax(PointMatrix& u, const PointMatrix& external_force, Real reference_residual = -1.0) const;
+  /// Force decomposition over ranks: the model computed the internal force of this rank's nodes only;
+  /// complete(F) fills in the others' (an all-gather). Unset: the force is whole.
+  void set_force_completion(std::function<void(PointMatrix&)> complete) { complete_force_ = std::move(complete); }
 
  private:
   const PeridynamicModel& solid_;
@@ -58,6 +62,7 @@ class AdaptiveDynamicRelaxation {
   std::vector<char> free_;
   AdaptiveDynamicRelaxationOptions options_;
   const RelaxationCoordinates* coordinates_ = nullptr;
+  std::function<void(PointMatrix&)> complete_force_;
 };
 
 }  // namespace lamina::pd

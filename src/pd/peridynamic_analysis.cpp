@@ -15,9 +15,11 @@
 #include "core/error.hpp"
 #include "core/memory.hpp"
 #include "core/stopwatch.hpp"
+#include "pd/force_split.hpp"
 #include "pd/lean_peridynamic_solid.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
+#include "solve/petsc_linear_solver.hpp"
 
 namespace lamina::pd {
 
@@ -112,8 +114,8 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
     }
   }
   const auto start = Clock::now();
-  if (comm_.distributed()) {
-    check_distributable();
+  if (comm_.distributed()) check_distributable();
+  if (comm_.distributed() && problem_.analysis == PdAnalysisKind::explicit_dynamics) {
     ranks_ = std::make_unique<RankNodes>();
     problem_ = distribute_problem(problem_, comm_, *ranks_);
     owned_dof_ = Eigen::VectorXd::Zero(3 * static_cast<Index>(ranks_->global.size()));
@@ -200,21 +202,55 @@ bool PeridynamicAnalysis::lean_bond_storage() const {
 
 void PeridynamicAnalysis::check_distributable() const {
   const std::string ranks = fmt::format("{} ranks", comm_.size());
-  if (problem_.analysis != PdAnalysisKind::explicit_dynamics) {
-    const char* kind = problem_.analysis == PdAnalysisKind::quasi_static ? "quasi_static"
-                       : problem_.analysis == PdAnalysisKind::buckling   ? "buckling"
-                                                                         : "linear_static";
-    throw SingleProcessOnly("pd.analysis", fmt::format("explicit on {} (linear_static, quasi_static and buckling run on one "
-                                                "process: start lamina without mpirun / --ranks)", ranks),
-                     kind);
+  switch (problem_.analysis) {
+    case PdAnalysisKind::buckling:
+      throw SingleProcessOnly("pd.analysis",
+                              fmt::format("explicit, quasi_static or linear_static on {} (buckling runs on one process: "
+                                          "start lamina without mpirun / --ranks)", ranks),
+                              "buckling");
+    case PdAnalysisKind::linear_static:
+      if (problem_.solver.type == LinearSolverChoice::Type::cholmod)
+        throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} (cholmod runs on one process)", ranks),
+                                "cholmod");
+      return;
+    case PdAnalysisKind::quasi_static: return;  // replicated data, forces split (split_force_work)
+    case PdAnalysisKind::explicit_dynamics: break;
   }
   const BodyOptions& o = problem_.body;
   if (o.plate_model == PlateModel::automatic && o.kinematics == Kinematics::three_dimensional &&
       o.surface_correction != SurfaceCorrection::plate && find_plate_columns(problem_.positions, problem_.volumes))
     throw SingleProcessOnly("pd.plate_model",
-                            fmt::format("lattice on {} (this body is a plate lattice, whose director plate model runs on one "
-                                 "process)", ranks),
-                     "automatic");
+                            fmt::format("lattice for explicit dynamics on {} (this body is a plate lattice, whose director "
+                                        "plate model runs explicit dynamics on one process; quasi_static runs on ranks)",
+                                        ranks),
+                            "automatic");
+}
+
+void PeridynamicAnalysis::split_force_work(bool on) {
+  if (!comm_.distributed() || ranks_) return;
+  if (on && !force_split_) force_split_ = std::make_unique<ForceSplit>(body_->positions(), plate_columns_, comm_);
+  static const std::vector<char> everything;
+  const std::vector<char>& mine = on ? force_split_->mine() : everything;
+  if (auto* plate = dynamic_cast<PeridynamicPlate*>(model_.get())) {
+    plate->restrict_to_nodes(mine);
+    return;
+  }
+  if (!on) {
+    body_->set_node_roles({});
+    return;
+  }
+  // the lattice: forces of the block's nodes, dilatations of the block and its families
+  const Index n = body_->nodes();
+  std::vector<NodeRole> roles(static_cast<std::size_t>(n), NodeRole::outer_halo);
+  for (Index i = 0; i < n; ++i)
+    if (mine[static_cast<std::size_t>(i)]) roles[static_cast<std::size_t>(i)] = NodeRole::owned;
+  for (Index i = 0; i < n; ++i)
+    if (mine[static_cast<std::size_t>(i)])
+      for (Index b = body_->first_bond(i); b < body_->end_bond(i); ++b) {
+        NodeRole& r = roles[static_cast<std::size_t>(body_->neighbour(b))];
+        if (r == NodeRole::outer_halo) r = NodeRole::inner_halo;
+      }
+  body_->set_node_roles(std::move(roles));
 }
 
 Real PeridynamicAnalysis::ramp(int index, Real factor) const {
@@ -260,7 +296,7 @@ void PeridynamicAnalysis::run(OutputSink& sink) {
   timings_["solve_s"] = seconds_since(start);
 }
 
-PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper, bool check) {
+PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper, bool check, bool petsc) {
   const Index n = body_->nodes();
   k0_upper = model_->stiffness(*model_->state_of(PointMatrix::Zero(3, n), true), true, false);
   if (check) check_unloaded_stiffness(k0_upper);
@@ -279,7 +315,9 @@ PointMatrix PeridynamicAnalysis::linear_solution(solve::SparseMatrix& k0_upper, 
     if (map[d] >= 0) rhs[map[d]] = rhs_full[static_cast<Index>(d)];
   const solve::SparseMatrix reduced = reduce_upper(k0_upper, map, count);
   solve::SolverReport report;
-  const Eigen::VectorXd x = solve::solve_symmetric(reduced, rhs, report);
+  const Eigen::VectorXd x = petsc ? solve::solve_symmetric_petsc(reduced, rhs, problem_.solver, comm_, report,
+                                                                  solve::SystemShares::replicated, true, 1)
+                                  : solve::solve_symmetric(reduced, rhs, report);
   timings_["factor_s"] = report.factor_seconds;
   for (std::size_t d = 0; d < free.size(); ++d)
     if (map[d] >= 0) u.data()[d] = x[map[d]];
@@ -316,7 +354,9 @@ void PeridynamicAnalysis::check_unloaded_stiffness(const solve::SparseMatrix& k0
 void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {
   sink->output_point(0, 0.0, 0.0);
   solve::SparseMatrix k0;
-  u_ = linear_solution(k0);
+  const auto type = problem_.solver.type;
+  u_ = linear_solution(k0, false,
+                       comm_.distributed() || type == LinearSolverChoice::Type::mumps || type == LinearSolverChoice::Type::cg);
   state_ = model_->state_of(u_, true);
   internal_force_ = model_->internal_force(*state_);
   external_force_ = external_force(1.0);

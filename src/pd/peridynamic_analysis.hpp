@@ -26,6 +26,7 @@
 
 #include "core/analysis.hpp"
 #include "pd/adaptive_dynamic_relaxation.hpp"
+#include "pd/force_split.hpp"
 #include "pd/linear_peridynamic_solid.hpp"
 #include "parallel/communicator.hpp"
 #include "pd/peridynamic_problem.hpp"
@@ -37,7 +38,8 @@ class PeridynamicAnalysis : public Analysis {
  public:
   /// Checks the probes (InputError for unsupported fields / components).
   /// On a communicator of several ranks (collective) the problem (the whole body, the same on every
-  /// rank) is partitioned; InputError for the analyses that run on one process only.
+  /// rank) is partitioned (explicit) or kept whole with the force work split (quasi_static; linear_static
+  /// solves through PETSc); SingleProcessOnly for the analyses that run on one process only.
   PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes,
                       const parallel::Communicator& comm = parallel::Communicator::world());
 
@@ -91,7 +93,8 @@ class PeridynamicAnalysis : public Analysis {
   void run_explicit(OutputSink* sink);
   void run_buckling(OutputSink* sink);
   /// Linear static solution at load factor 1 (used by linear_static and buckling).
-  PointMatrix linear_solution(solve::SparseMatrix& k0_upper, bool check = false);
+  /// petsc: solved through PETSc (solver: mumps | cg; linear_static on several ranks), else CHOLMOD.
+  PointMatrix linear_solution(solve::SparseMatrix& k0_upper, bool check = false, bool petsc = false);
   /// Refuses (InputError, exit 2) an unloaded stiffness with a zero-energy mode on the free dofs:
   /// a rigid-body motion the supports leave free, or a spurious mode of the lattice / horizon.
   void check_unloaded_stiffness(const solve::SparseMatrix& k0_upper);
@@ -103,6 +106,10 @@ class PeridynamicAnalysis : public Analysis {
   Real distributed_probe(const Probe& probe) const;
   /// Refuses (InputError) what a distributed run does not do, before the partition.
   void check_distributable() const;
+  /// Several ranks without a node partition (quasi_static: replicated data, split work): from now on the
+  /// model computes the internal forces of this rank's block of nodes only (on, force_split.hpp), or every
+  /// node (off).
+  void split_force_work(bool on);
 
   void update_energy();
 
@@ -127,6 +134,7 @@ class PeridynamicAnalysis : public Analysis {
   const PlateColumns* plate_columns_ = nullptr;  // the plate model's columns (owned by model_), else null
   std::string model_reason_;  // why a 3D body is not a plate lattice (the lattice model applies)
   const parallel::Communicator& comm_;
+  std::unique_ptr<ForceSplit> force_split_;  // several ranks, quasi_static: the force decomposition
   std::unique_ptr<RankNodes> ranks_;  // several ranks: this rank's nodes; null on one process
   /// Several ranks, between before_ and after_checkpoint: the rank's own per-node arrays (the members
   /// hold the whole body's meanwhile).

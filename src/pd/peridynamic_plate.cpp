@@ -211,6 +211,7 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
   s.self_a.resize(3, nc);
 #pragma omp parallel for schedule(static)
   for (Index c = 0; c < nc; ++c) {
+    if (!marked(kinematic_column_, c)) continue;
     Vec3 m = Vec3::Zero(), a = Vec3::Zero();
     for (Index p = pc.first[c]; p < pc.first[c + 1]; ++p) {
       const Index k = pc.node[p];
@@ -239,6 +240,7 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
     std::vector<BondScratch> scratch;
 #pragma omp for schedule(dynamic, 64)
     for (Index i = 0; i < nc; ++i) {
+      if (!marked(bond_column_, i)) continue;
       const Index b0 = fam.first_bond(i), b1 = fam.end_bond(i);
       scratch.resize(static_cast<std::size_t>(b1 - b0));
       const BondConstants* bc = bond_constants_.data() + b0;
@@ -331,6 +333,29 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
   }
 }
 
+void PeridynamicPlate::restrict_to_nodes(const std::vector<char>& nodes) {
+  force_column_.clear();
+  bond_column_.clear();
+  kinematic_column_.clear();
+  if (nodes.empty()) return;
+  const PlateColumns& pc = columns_;
+  const PeridynamicBody& fam = *family_;
+  const Index nc = pc.columns();
+  auto grow = [&](const std::vector<char>& from) {  // from and the families of its columns
+    std::vector<char> to = from;
+    for (Index c = 0; c < nc; ++c)
+      if (from[static_cast<std::size_t>(c)])
+        for (Index b = fam.first_bond(c); b < fam.end_bond(c); ++b) to[static_cast<std::size_t>(fam.neighbour(b))] = 1;
+    return to;
+  };
+  force_column_.assign(static_cast<std::size_t>(nc), 0);
+  for (Index c = 0; c < nc; ++c)
+    for (Index p = pc.first[c]; p < pc.first[c + 1]; ++p)
+      if (nodes[static_cast<std::size_t>(pc.node[p])]) force_column_[static_cast<std::size_t>(c)] = 1;
+  bond_column_ = grow(force_column_);
+  kinematic_column_ = grow(bond_column_);
+}
+
 PointMatrix PeridynamicPlate::internal_force(const ModelState& state) const {
   const PlateState& s = static_cast<const PlateState&>(state);
   const PlateColumns& pc = columns_;
@@ -339,6 +364,7 @@ PointMatrix PeridynamicPlate::internal_force(const ModelState& state) const {
   PointMatrix force(3, nodes_);
 #pragma omp parallel for schedule(static)
   for (Index c = 0; c < nc; ++c) {
+    if (!marked(force_column_, c)) continue;
     Vec3 gm = Vec3::Zero(), gd = s.self_d.col(c);
     for (Index b = fam.first_bond(c); b < fam.end_bond(c); ++b) {
       const Index r = fam.reverse(b);

@@ -66,6 +66,12 @@ class PeridynamicPlate : public PeridynamicModel {
   Eigen::VectorXd nodal_dilatation(const ModelState& state) const override;
   bool node_strain(const ModelState& state, Index node, Mat3& strain) const override;
 
+  /// Force decomposition over ranks (replicated data, split work): from now on update() and
+  /// internal_force() compute only what the forces of the marked nodes need - their columns, those
+  /// columns' families (the bond terms) and theirs (m, d); the rest of the state and force is left
+  /// unspecified. Empty: every column (the state is whole again).
+  void restrict_to_nodes(const std::vector<char>& nodes);
+
   const PlateColumns& columns() const { return columns_; }
   const PeridynamicBody& family() const { return *family_; }
   const PlateStatistics& statistics() const { return statistics_; }
@@ -75,6 +81,9 @@ class PeridynamicPlate : public PeridynamicModel {
   int gradient_weights(Index b0, Index b1, Real horizon);
 
   PlateColumns columns_;
+  // restrict_to_nodes: the columns whose force, bond terms and kinematics are computed (empty: all)
+  std::vector<char> force_column_, bond_column_, kinematic_column_;
+  static bool marked(const std::vector<char>& set, Index c) { return set.empty() || set[static_cast<std::size_t>(c)]; }
   std::unique_ptr<PeridynamicBody> family_;  // 2D families over the column centres (bond volumes, reverse bonds)
   PointMatrix reference_;                    // node positions of the stress-free configuration
   Index nodes_ = 0;

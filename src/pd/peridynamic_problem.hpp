@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/linear_solver_choice.hpp"
 #include "core/prescribed_dof.hpp"
 #include "core/ramp.hpp"
 #include "pd/peridynamic_body.hpp"
@@ -81,6 +82,7 @@ struct PeridynamicProblem {
   BucklingOptions buckling;
   Imperfection imperfection;
   bool check_zero_energy = true;    // quasi_static and buckling: refuse a stiffness with a zero-energy mode
+  LinearSolverChoice solver;        // `solver:` for linear_static (PETSc on several ranks or when asked)
 };
 
 }  // namespace lamina::pd

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/stopwatch.hpp"
 #include "pd/peridynamic_analysis.hpp"
 #include "pd/relaxation_coordinates.hpp"
 
@@ -43,6 +44,14 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
       lambda[d] = 1.0;
     }
   AdaptiveDynamicRelaxation relaxation(*model_, lambda, free, options, coordinates ? &*coordinates : nullptr);
+  // several ranks: every rank holds the whole body and relaxation vectors and computes the forces of its
+  // block of nodes (split_force_work); the blocks are all-gathered each iteration, so every rank runs the
+  // same iterations on the same numbers as one process would
+  const bool split = comm_.distributed();
+  if (split) {
+    split_force_work(true);
+    relaxation.set_force_completion([this](PointMatrix& f) { force_split_->complete(f); });
+  }
   if (!resumed_) sink->output_point(0, 0.0, 0.0);
   // Start field of the first increment: inverse-distance interpolation of the prescribed values.
   auto interpolated_start = [&](Real factor) {
@@ -126,6 +135,8 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
     apply_prescribed(u, target, false);
     // Stage 2: relax to equilibrium.
     const PointMatrix fext = external_force(target);
+    if (split) split_force_work(true);
+    const auto relax_start = Clock::now();
     RelaxationResult result = relaxation.relax(u, fext);
     total_iterations_ += result.iterations;
     // A snap-through under load control needs the fictitious dynamics to run on to the next stable
@@ -138,6 +149,14 @@ void PeridynamicAnalysis::run_quasi_static(OutputSink* sink) {
       total_iterations_ += result.iterations;
       result.iterations += used;
       result.damping_energy += dissipated;
+    }
+    timings_["relaxation_s"] += seconds_since(relax_start);
+    if (split) {  // the whole state again (energy, probes, fields); its forces equal the gathered ones
+      split_force_work(false);
+      if (result.converged) {
+        model_->update(u, *result.state);
+        result.internal_force = model_->internal_force(*result.state);
+      }
     }
     if (!result.converged) {
       if (++cuts > options.max_cuts)

@@ -4,11 +4,13 @@
   - every history column on N ranks equals the one-process column within 1e-10 relative (to the
     column's largest magnitude), the counts in summary.json are equal;
   - each VTU frame is a .pvtu of N pieces whose points add up to the body's nodes;
-  - the mpm runs (element decomposition) are those of one process, bit for bit;
+  - the mpm runs (element decomposition) and the pd ADR runs (the seed's plate on the plate model, a 3D
+    bar lattice; forces split) are those of one process, bit for bit;
   - a pd and an mpm run on 2 ranks restarted from a checkpoint repeat the uninterrupted history bit for bit;
-  - a case that runs on one process only (pd ADR) exits 2 on 2 ranks with the reason;
-  - efg (symmetric, and unsymmetric with vci) and mpfem (linear and large deformation) solved through PETSc
-    on 2 and 3 ranks (MUMPS, CG with GAMG) give the one-process probes within 1e-9 (MUMPS) / 1e-6 (CG).
+  - a case that runs on one process only (pd buckling) exits 2 on 2 ranks with the reason;
+  - efg (symmetric, and unsymmetric with vci), mpfem (linear and large deformation) and pd linear static
+    solved through PETSc on 2 and 3 ranks (MUMPS, CG with GAMG) give the one-process probes within 1e-9
+    (MUMPS) / 1e-6 (CG).
 Usage: run_rank_tests.py LAMINA CASE_DIR WORK_DIR"""
 import csv
 import json
@@ -78,7 +80,9 @@ history_cases = [(os.path.join(case_dir, name), pd_variants if name.startswith((
 history_cases += [(os.path.join(source, "validation/mpm_cantilever_shear/case.yaml"),
                    {"3_levels": ["--set", "mpm.load_levels=3"]}),
                   (os.path.join(source, "validation/mpm_hemisphere/case.yaml"),
-                   {"2_levels": ["--set", "mpm.load_levels=2", "--set", "output.vtu=false"]})]
+                   {"2_levels": ["--set", "mpm.load_levels=2", "--set", "output.vtu=false"]}),
+                  (os.path.join(source, "validation/pd_plate_tension/case.yaml"), {"adr": []}),
+                  (os.path.join(source, "validation/pd_bar_tension/case.yaml"), {"adr": []})]
 for case, variants in history_cases:
     name = os.path.basename(case) if os.path.dirname(case) == case_dir else case.split("/")[-2]
     for variant, extra in variants.items():
@@ -140,9 +144,8 @@ for name in ("block_initial_velocity.yaml", "mpm_plate_dynamic.yaml"):
     if not same or not frames:
         failures.append(f"{label}: the restarted run differs (history identical: {same}, frames complete: {frames})")
 
-# cases that run on one process only (pd quasi_static by ADR, another method): exit 2 with the reason,
-# no output folder
-for case in ("validation/pd_bar_tension/case.yaml",):
+# cases that run on one process only (pd buckling): exit 2 with the reason, no output folder
+for case in ("validation/pd_plate_buckling_linear/case.yaml",):
     out = os.path.join(work, "refused_" + case.split("/")[1])
     refused = run(os.path.join(source, case), 2, out)
     if refused.returncode != 2 or "one process" not in refused.stderr:
@@ -157,7 +160,8 @@ for case in ("validation/pd_bar_tension/case.yaml",):
 # one-process CHOLMOD run within the solver's accuracy
 static_cases = [("validation/efg_clamped_plate/case.yaml", []), ("validation/efg_bar_clamped/case.yaml", []),
                 ("validation/mpfem_cantilever/case.yaml", []),
-                ("validation/mpfem_cook_hyperelastic/case.yaml", ["--set", "mpfem.large_deformation.increments=4"])]
+                ("validation/mpfem_cook_hyperelastic/case.yaml", ["--set", "mpfem.large_deformation.increments=4"]),
+                ("validation/pd_plate_tension/case.yaml", ["--set", "pd.analysis=linear_static"])]
 for case, extra in static_cases:
     name = case.split("/")[1]
     one = os.path.join(work, name + "_cholmod")
