@@ -306,3 +306,35 @@ TEST(PeridynamicPlate, ColumnCoordinatesInvertKeepTheDensityBoundAndConditionBet
     EXPECT_GT(mapped.minCoeff(), 2.0 * nodes.minCoeff()) << layers << ": " << mapped.minCoeff() << " vs " << nodes.minCoeff();
   }
 }
+
+// Force decomposition (several ranks, docs/scaling.md): restricted to a block of nodes, the plate model's
+// forces on those nodes are the whole computation's, bit for bit, for 2 and 3 layers and two blocks of
+// different shape; lifting the restriction gives the whole force again.
+TEST(PeridynamicPlate, RestrictedForcesEqualTheWholeForcesOnTheBlock) {
+  for (int layers : {2, 3}) {
+    PlateFixture f(40, 5, 2, layers, 3.015);
+    const Index n = f.cloud.size();
+    const PointMatrix u = PointMatrix::Random(3, n) * 1e-2;
+    const PointMatrix whole = f.plate->internal_force(*f.plate->state_of(u));
+    for (int shape = 0; shape < 2; ++shape) {
+      std::vector<char> mine(static_cast<std::size_t>(n), 0);
+      Index count = 0;
+      for (Index k = 0; k < n; ++k) {
+        const Vec3 x = f.cloud.positions.col(k);
+        const bool in = shape == 0 ? x.y() < 15 : (x.x() > 20 && x.y() > 10 && x.y() < 30);
+        if (in) mine[static_cast<std::size_t>(k)] = 1, ++count;
+      }
+      ASSERT_GT(count, 0);
+      ASSERT_LT(count, n);
+      // the state first holds another field, so that anything the restriction leaves out is stale
+      auto state = f.plate->state_of(PointMatrix::Random(3, n) * 1e-2);
+      f.plate->restrict_to_nodes(mine);
+      f.plate->update(u, *state, false);
+      const PointMatrix part = f.plate->internal_force(*state);
+      for (Index k = 0; k < n; ++k)
+        if (mine[static_cast<std::size_t>(k)]) EXPECT_EQ(part.col(k), whole.col(k)) << layers << " " << shape << " " << k;
+      f.plate->restrict_to_nodes({});
+      EXPECT_EQ(f.plate->internal_force(*f.plate->state_of(u)), whole) << layers;
+    }
+  }
+}
