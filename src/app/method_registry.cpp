@@ -109,7 +109,7 @@ const std::vector<MethodEntry>& methods() {
       mpfem_method_entry(),
       MethodEntry{io::MethodKeys{"mls_fit", {"nodes", "jitter"}, false},
                   "MLS fit of an analytic field: errU, errDU, errDDU (seed 004 eqs 3-3..3-5)", read_mls_fit,
-                  create_mls_fit},
+                  create_mls_fit, {}, /*distributed=*/true},  // on several ranks: replicated (every rank the whole fit)
   };
   return entries;
 }

@@ -79,20 +79,21 @@ std::string to_string(Formulation formulation) {
   return "?";
 }
 
+namespace {
+/// Several ranks: the galerkin system is assembled in shares and solved by PETSc; the strong forms and
+/// the Lagrange-multiplier system are computed whole on every rank (replicated: the same numbers).
+const parallel::Communicator& working_communicator(const EfgProblem& problem, const parallel::Communicator& comm) {
+  const auto& o = problem.options;
+  const bool replicated = o.formulation != Formulation::galerkin || o.essential == EssentialMethod::lagrange;
+  return comm.distributed() && replicated ? parallel::Communicator::single() : comm;
+}
+}  // namespace
+
 EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const parallel::Communicator& comm)
-    : problem_(std::move(problem)), probes_(std::move(probes)), comm_(comm) {
-  if (comm_.distributed()) {
-    const auto& o = problem_.options;
-    const std::string ranks = fmt::format("{} ranks", comm_.size());
-    if (o.formulation != Formulation::galerkin)
-      throw SingleProcessOnly("efg.formulation", fmt::format("galerkin on {} (collocation and weighted least squares run on "
-                                                             "one process)", ranks), "a strong form");
-    if (o.essential == EssentialMethod::lagrange)
-      throw SingleProcessOnly("efg.essential", fmt::format("penalty or nitsche on {} (lagrange runs on one process)", ranks),
-                              "lagrange");
-    if (o.solver.type == LinearSolverChoice::Type::cholmod)
-      throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} (cholmod runs on one process)", ranks), "cholmod");
-  }
+    : problem_(std::move(problem)), probes_(std::move(probes)), comm_(working_communicator(problem_, comm)) {
+  if (comm_.distributed() && problem_.options.solver.type == LinearSolverChoice::Type::cholmod)
+    throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} ranks (cholmod runs on one process)", comm_.size()),
+                            "cholmod");
   for (const auto& p : probes_) {
     const std::string where = "probes." + p.name;
     if (p.field == "displacement") {

@@ -47,15 +47,20 @@ Environment::~Environment() {
 
 void Environment::before_finalize(std::function<void()> hook) { finalize_hooks().push_back(std::move(hook)); }
 
-Communicator::Communicator() {
-  if (!mpi_started) return;
+Communicator::Communicator(bool join_world) {
+  if (!join_world || !mpi_started) return;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
 }
 
 const Communicator& Communicator::world() {
-  static const Communicator world;
+  static const Communicator world(true);
   return world;
+}
+
+const Communicator& Communicator::single() {
+  static const Communicator alone(false);
+  return alone;
 }
 
 Real Communicator::sum(Real value) const {

@@ -29,6 +29,8 @@ class Communicator {
  public:
   /// All ranks of the run (one rank without MPI).
   static const Communicator& world();
+  /// This process alone (one rank, no MPI call): a computation every rank repeats whole (replicated).
+  static const Communicator& single();
 
   int rank() const { return rank_; }
   int size() const { return size_; }
@@ -57,7 +59,7 @@ class Communicator {
   void barrier() const;
 
  private:
-  Communicator();
+  explicit Communicator(bool join_world);
   int rank_ = 0, size_ = 1;
 };
 

@@ -115,7 +115,9 @@ PeridynamicAnalysis::PeridynamicAnalysis(PeridynamicProblem problem, std::vector
   }
   const auto start = Clock::now();
   if (comm_.distributed()) check_distributable();
-  if (comm_.distributed() && problem_.analysis == PdAnalysisKind::explicit_dynamics) {
+  // several ranks: explicit dynamics of a node lattice runs partitioned (owned nodes and halos); the other
+  // analyses and the plate model keep the whole body on every rank (split_force_work)
+  if (comm_.distributed() && problem_.analysis == PdAnalysisKind::explicit_dynamics && !plate_lattice()) {
     ranks_ = std::make_unique<RankNodes>();
     problem_ = distribute_problem(problem_, comm_, *ranks_);
     owned_dof_ = Eigen::VectorXd::Zero(3 * static_cast<Index>(ranks_->global.size()));
@@ -201,29 +203,15 @@ bool PeridynamicAnalysis::lean_bond_storage() const {
 }
 
 void PeridynamicAnalysis::check_distributable() const {
-  const std::string ranks = fmt::format("{} ranks", comm_.size());
-  switch (problem_.analysis) {
-    case PdAnalysisKind::buckling:
-      throw SingleProcessOnly("pd.analysis",
-                              fmt::format("explicit, quasi_static or linear_static on {} (buckling runs on one process: "
-                                          "start lamina without mpirun / --ranks)", ranks),
-                              "buckling");
-    case PdAnalysisKind::linear_static:
-      if (problem_.solver.type == LinearSolverChoice::Type::cholmod)
-        throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} (cholmod runs on one process)", ranks),
-                                "cholmod");
-      return;
-    case PdAnalysisKind::quasi_static: return;  // replicated data, forces split (split_force_work)
-    case PdAnalysisKind::explicit_dynamics: break;
-  }
+  if (problem_.analysis == PdAnalysisKind::linear_static && problem_.solver.type == LinearSolverChoice::Type::cholmod)
+    throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} ranks (cholmod runs on one process)", comm_.size()),
+                            "cholmod");
+}
+
+bool PeridynamicAnalysis::plate_lattice() const {
   const BodyOptions& o = problem_.body;
-  if (o.plate_model == PlateModel::automatic && o.kinematics == Kinematics::three_dimensional &&
-      o.surface_correction != SurfaceCorrection::plate && find_plate_columns(problem_.positions, problem_.volumes))
-    throw SingleProcessOnly("pd.plate_model",
-                            fmt::format("lattice for explicit dynamics on {} (this body is a plate lattice, whose director "
-                                        "plate model runs explicit dynamics on one process; quasi_static runs on ranks)",
-                                        ranks),
-                            "automatic");
+  return o.plate_model == PlateModel::automatic && o.kinematics == Kinematics::three_dimensional &&
+         o.surface_correction != SurfaceCorrection::plate && find_plate_columns(problem_.positions, problem_.volumes);
 }
 
 void PeridynamicAnalysis::split_force_work(bool on) {

@@ -43,6 +43,18 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   // several ranks: from here on the halo's dilatation forces come from their owners (the stiffness above
   // needed the inner halo's own bond directions)
   if (ranks_) body_->set_halo_exchange([this](Real* data, int rows) { ranks_->halo.exchange(data, rows); });
+  // several ranks on a plate lattice (no partition): every rank the whole body, the forces of its block
+  // of columns, gathered (force_split.hpp); the strain energy and probes at output points need the whole state
+  const bool split = comm_.distributed() && !ranks_;
+  if (split) split_force_work(true);
+  auto strain_energy = [&] {
+    if (!split) return comm_.sum(model_->strain_energy(*state_));
+    split_force_work(false);
+    model_->update(u_, *state_);
+    const Real energy = model_->strain_energy(*state_);
+    split_force_work(true);
+    return energy;
+  };
   ExplicitLoop& loop = explicit_;
   Index steps = std::max<Index>(1, static_cast<Index>(std::ceil(options.end_time / dt - 1e-9)));
   dt = options.end_time / static_cast<Real>(steps);
@@ -90,6 +102,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   auto forces = [&](Real t) {
     model_->update(u_, *state_);
     internal_force_ = model_->internal_force(*state_);
+    if (split) force_split_->complete(internal_force_);
     external_force_ = external_force(t / options.end_time);
   };
   Eigen::VectorXd& acceleration = loop.acceleration;
@@ -109,7 +122,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     forces(0.0);
     acceleration.resize(3 * n);
     accelerate();
-    energy_internal_ = comm_.sum(model_->strain_energy(*state_));
+    energy_internal_ = strain_energy();
     energy_kinetic_ = ranks_ ? comm_.sum(0.5 * (mass.array() * v.array().square() * owned_dof_.array()).sum())
                              : 0.5 * (mass.array() * v.array().square()).sum();
     loop.initial_total = energy_internal_ + energy_kinetic_;
@@ -174,7 +187,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     steps_ = step;
     if (step % every == 0 || step == steps) {
       // the strain energy (one more pass over the bonds) only where it is reported
-      energy_internal_ = comm_.sum(model_->strain_energy(*state_));
+      energy_internal_ = strain_energy();
       if (!std::isfinite(energy_internal_))
         throw AnalysisError(fmt::format("explicit dynamics: non-finite strain energy at step {} (t = {:.4g})", step, t));
       timings_["energy_error"] = (energy_internal_ + energy_kinetic_ - energy_external_ - initial_total) /

@@ -7,7 +7,9 @@
   - the mpm runs (element decomposition) and the pd ADR runs (the seed's plate on the plate model, a 3D
     bar lattice; forces split) are those of one process, bit for bit;
   - a pd and an mpm run on 2 ranks restarted from a checkpoint repeat the uninterrupted history bit for bit;
-  - a case that runs on one process only (pd buckling) exits 2 on 2 ranks with the reason;
+  - the pd plate model under explicit dynamics (forces split) is that of one process, bit for bit;
+  - computations every rank repeats (efg collocation and Lagrange multipliers, mls_fit) are those of one
+    process, bit for bit; a solve that runs on one process only (solver: cholmod) exits 2 on 2 ranks;
   - efg (symmetric, and unsymmetric with vci), mpfem (linear and large deformation) and pd linear static
     solved through PETSc on 2 and 3 ranks (MUMPS, CG with GAMG) give the one-process probes within 1e-9
     (MUMPS) / 1e-6 (CG).
@@ -81,7 +83,9 @@ history_cases += [(os.path.join(source, "validation/mpm_cantilever_shear/case.ya
                    {"3_levels": ["--set", "mpm.load_levels=3"]}),
                   (os.path.join(source, "validation/mpm_hemisphere/case.yaml"),
                    {"2_levels": ["--set", "mpm.load_levels=2", "--set", "output.vtu=false"]}),
-                  (os.path.join(source, "validation/pd_plate_tension/case.yaml"), {"adr": []}),
+                  (os.path.join(source, "validation/pd_plate_tension/case.yaml"),
+                   {"adr": [], "explicit": ["--set", "pd.analysis=explicit", "--set", "pd.explicit.end_time=2e-5",
+                                            "--set", "pd.explicit.outputs=4"]}),
                   (os.path.join(source, "validation/pd_bar_tension/case.yaml"), {"adr": []})]
 for case, variants in history_cases:
     name = os.path.basename(case) if os.path.dirname(case) == case_dir else case.split("/")[-2]
@@ -144,10 +148,10 @@ for name in ("block_initial_velocity.yaml", "mpm_plate_dynamic.yaml"):
     if not same or not frames:
         failures.append(f"{label}: the restarted run differs (history identical: {same}, frames complete: {frames})")
 
-# cases that run on one process only (pd buckling): exit 2 with the reason, no output folder
-for case in ("validation/pd_plate_buckling_linear/case.yaml",):
+# what runs on one process only (an explicit solver: cholmod): exit 2 with the reason, no output folder
+for case in ("validation/efg_bar_clamped/case.yaml",):
     out = os.path.join(work, "refused_" + case.split("/")[1])
-    refused = run(os.path.join(source, case), 2, out)
+    refused = run(os.path.join(source, case), 2, out, ["--set", "solver.type=cholmod"])
     if refused.returncode != 2 or "one process" not in refused.stderr:
         failures.append(f"{case} on 2 ranks: exit {refused.returncode}, stderr {refused.stderr.strip()!r}; expected exit 2 "
                         "naming one process")
@@ -155,6 +159,23 @@ for case in ("validation/pd_plate_buckling_linear/case.yaml",):
         failures.append(f"{case} on 2 ranks: an output folder was written")
     else:
         print(f"{case} on 2 ranks: exit 2:", refused.stderr.strip().splitlines()[-1])
+
+# computations every rank repeats whole (replicated: efg strong forms and Lagrange multipliers, mls_fit):
+# the one-process result, bit for bit
+replicated_cases = [("validation/efg_bar_clamped/case.yaml", ["--set", "efg.formulation=collocation"]),
+                    ("validation/efg_bar_clamped/case.yaml", ["--set", "efg.essential_bc=lagrange"]),
+                    ("validation/mls_fit_quadratic/case.yaml", [])]
+for k, (case, extra) in enumerate(replicated_cases):
+    label = f"{case} {' '.join(extra[1::2])} on 2 ranks (replicated)"
+    one, two = os.path.join(work, f"replicated_{k}_1"), os.path.join(work, f"replicated_{k}_2")
+    r1, r2 = run(os.path.join(source, case), 1, one, extra), run(os.path.join(source, case), 2, two, extra)
+    if r1.returncode != 0 or r2.returncode != 0:
+        failures.append(f"{label}: exit {r1.returncode} / {r2.returncode}: {r1.stderr.strip()} {r2.stderr.strip()}")
+        continue
+    same = open(os.path.join(one, "history.csv")).read() == open(os.path.join(two, "history.csv")).read()
+    print(f"{label}: history {'identical' if same else 'DIFFERENT'}")
+    if not same:
+        failures.append(f"{label}: the history differs from one process")
 
 # static methods through PETSc (solver: mumps, the default on several ranks, or cg): the probes of the
 # one-process CHOLMOD run within the solver's accuracy
