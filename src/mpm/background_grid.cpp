@@ -99,6 +99,7 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
     slot_of_entry_[static_cast<std::size_t>(entry)] = static_cast<Index>(slot_key_.size()) - 1;
   }
   slot_begin_.push_back(static_cast<Index>(entries));
+  ++connectivity_version_;
   return true;
 }
 
@@ -113,6 +114,53 @@ void BackgroundGrid::scatter(const PointMatrix& q, const Eigen::Matrix3Xd& mask,
       sum += weight_[static_cast<std::size_t>(*e)] * q.col(c).cwiseProduct(mask.col(c));
     }
     grid.col(s) = sum;
+  }
+}
+
+void BackgroundGrid::scatter_mass_momentum_force(const Eigen::VectorXd& mass, const PointMatrix& velocity,
+                                                 const PointMatrix& force, const Eigen::Matrix3Xd& mask,
+                                                 Eigen::Matrix3Xd& grid_mass, Eigen::Matrix3Xd& grid_momentum,
+                                                 Eigen::Matrix3Xd& grid_force, const std::vector<Index>* slots) const {
+  const Index active = active_nodes();
+  grid_mass.resize(3, active);
+  grid_momentum.resize(3, active);
+  grid_force.resize(3, active);
+  const Index count = slots ? static_cast<Index>(slots->size()) : active;
+#pragma omp parallel for schedule(static) if (count > 4096)
+  for (Index k = 0; k < count; ++k) {
+    const Index s = slots ? (*slots)[static_cast<std::size_t>(k)] : k;
+    Vec3 m = Vec3::Zero(), p = Vec3::Zero(), f = Vec3::Zero();
+    for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
+      const Index c = *e / kNodesPerCorner;
+      const Real w = weight_[static_cast<std::size_t>(*e)];
+      const Vec3 free = mask.col(c);
+      m += w * (Vec3::Constant(mass[c])).cwiseProduct(free);
+      p += w * (mass[c] * velocity.col(c)).cwiseProduct(free);
+      f += w * force.col(c).cwiseProduct(free);
+    }
+    grid_mass.col(s) = m;
+    grid_momentum.col(s) = p;
+    grid_force.col(s) = f;
+  }
+}
+
+std::vector<Index> BackgroundGrid::slots_of_corners(Index first, Index last) const {
+  std::vector<char> touched(static_cast<std::size_t>(active_nodes()), 0);
+  for (Index c = first; c < last; ++c)
+    for (int a = 0; a < kNodesPerCorner; ++a) touched[static_cast<std::size_t>(slot(c, a))] = 1;
+  std::vector<Index> slots;
+  for (Index s = 0; s < active_nodes(); ++s)
+    if (touched[static_cast<std::size_t>(s)]) slots.push_back(s);
+  return slots;
+}
+
+void BackgroundGrid::gather(const Eigen::Matrix3Xd& grid, PointMatrix& q, Index first, Index last) const {
+  q.resize(3, static_cast<Index>(cell_of_corner_.size()));
+#pragma omp parallel for schedule(static) if (last - first > 1024)
+  for (Index c = first; c < last; ++c) {
+    Vec3 sum = Vec3::Zero();
+    for (int a = 0; a < kNodesPerCorner; ++a) sum += weight(c, a) * grid.col(slot(c, a));
+    q.col(c) = sum;
   }
 }
 

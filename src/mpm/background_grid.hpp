@@ -42,6 +42,20 @@ class BackgroundGrid {
   /// G2P: corner value q_c = sum_I S_I(x_c) g_I.
   void gather(const Eigen::Matrix3Xd& grid, PointMatrix& q) const;
 
+  /// P2G of a step in one pass over the entries: mass m_c, momentum m_c v_c and force f_c per free
+  /// component (mask), the same sums as three scatter() calls; slots: only those (null: all).
+  void scatter_mass_momentum_force(const Eigen::VectorXd& mass, const PointMatrix& velocity, const PointMatrix& force,
+                                   const Eigen::Matrix3Xd& mask, Eigen::Matrix3Xd& grid_mass, Eigen::Matrix3Xd& grid_momentum,
+                                   Eigen::Matrix3Xd& grid_force, const std::vector<Index>* slots = nullptr) const;
+
+  // Several ranks (a block of corners per rank, docs/scaling.md): the same sums, restricted.
+  /// Counts the connectivity rebuilds of locate(): a list of slots is valid while this is unchanged.
+  Index connectivity_version() const { return connectivity_version_; }
+  /// The slots that the corners [first, last) scatter to, ascending.
+  std::vector<Index> slots_of_corners(Index first, Index last) const;
+  /// gather() of the corners [first, last) only (q is sized to all corners; the others unspecified).
+  void gather(const Eigen::Matrix3Xd& grid, PointMatrix& q, Index first, Index last) const;
+
  private:
   Vec3 origin_;
   Real cell_;
@@ -54,6 +68,7 @@ class BackgroundGrid {
   std::vector<std::pair<std::int64_t, Index>> kept_, moved_;  // scratch of locate()'s re-sort
   std::vector<char> corner_moved_;                            // corner changed cell in this locate()
   std::vector<Index> slot_begin_{0};
+  Index connectivity_version_ = 0;
   std::vector<std::int64_t> slot_key_;
 };
 

@@ -113,6 +113,18 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
   for (Index e = 0; e < e_count; ++e)
     for (int a = 0; a < 4; ++a) incidence_[static_cast<std::size_t>(fill[static_cast<std::size_t>(mesh.quads(a, e))]++)] = 4 * e + a;
 
+  // several ranks: the node block, the elements touching it, the elements it owns
+  node_first_ = comm_.block_begin(n, comm_.rank());
+  node_last_ = comm_.block_begin(n, comm_.rank() + 1);
+  owns_element_.assign(static_cast<std::size_t>(e_count), 0);
+  for (Index e = 0; e < e_count; ++e) {
+    auto mine = [&](Index node) { return node >= node_first_ && node < node_last_; };
+    bool touches = false;
+    for (int a = 0; a < 4; ++a) touches = touches || mine(mesh.quads(a, e));
+    if (touches) rank_elements_.push_back(e);
+    owns_element_[static_cast<std::size_t>(e)] = mine(mesh.quads(0, e));
+  }
+
   stress_ = Eigen::MatrixXd::Zero(element_->stress_size(), e_count);
   hourglass_.setZero(shell::BelytschkoTsayShell::kHourglassSize, e_count);
   thickness_ = Eigen::VectorXd::Constant(e_count, mesh.thickness);
@@ -135,16 +147,39 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
 
 void MpmAnalysis::gather_element_state() {
   if (!comm_.distributed()) return;
+  // each element from its owner (the other ranks add zeros: exact), every rank all of them
   const Index e_count = problem_.mesh.element_count();
-  comm_.all_gather_blocks(stress_.data(), static_cast<int>(stress_.rows()), e_count);
-  comm_.all_gather_blocks(hourglass_.data(), static_cast<int>(hourglass_.rows()), e_count);
+  const Index per = stress_.rows() + hourglass_.rows() + 2;
+  std::vector<Real> all(static_cast<std::size_t>(per * e_count), 0.0);
+  for (Index e = 0; e < e_count; ++e) {
+    if (!owns_element_[static_cast<std::size_t>(e)]) continue;
+    Real* out = all.data() + per * e;
+    for (Index r = 0; r < stress_.rows(); ++r) *out++ = stress_(r, e);
+    for (Index r = 0; r < hourglass_.rows(); ++r) *out++ = hourglass_(r, e);
+    *out++ = thickness_[e];
+    *out++ = element_length_[e];
+  }
+  comm_.sum(all);
+  for (Index e = 0; e < e_count; ++e) {
+    const Real* in = all.data() + per * e;
+    for (Index r = 0; r < stress_.rows(); ++r) stress_(r, e) = *in++;
+    for (Index r = 0; r < hourglass_.rows(); ++r) hourglass_(r, e) = *in++;
+    thickness_[e] = *in++;
+    element_length_[e] = *in++;
+  }
+}
+
+void MpmAnalysis::gather_node_blocks(std::initializer_list<std::pair<Real*, int>> arrays) {
+  // one in-place all-gather per array: measured faster than packing them into one message (the copies
+  // cost more than the extra latency at these sizes)
+  if (!comm_.distributed()) return;
+  for (const auto& [data, rows] : arrays) comm_.all_gather_blocks(data, rows, x_.cols());
 }
 
 void MpmAnalysis::compute_fictitious_masses() {
   gather_element_state();
   stiffness_proportional_masses(*element_, problem_.mesh, x_, stress_, hourglass_, thickness_, incidence_begin_, incidence_,
                                 dyn_mass_, dyn_inertia_);
-  node_mass_.resize(3, 0);  // the grid's copy is rebuilt from the new masses
   masses_age_ = 0;
   masses_stale_ = false;
 }
@@ -179,15 +214,14 @@ void MpmAnalysis::begin_level() {
 
 void MpmAnalysis::compute_internal_forces(Real dt_stress) {
   const ShellMesh& mesh = problem_.mesh;
-  const Index e_count = mesh.element_count();
+  const Index count = static_cast<Index>(rank_elements_.size());  // all elements on one process
   Index bad = -1;
-  // several ranks: this rank's block of the elements (all of them on one process)
-  const Index e_first = comm_.block_begin(e_count, comm_.rank()), e_last = comm_.block_begin(e_count, comm_.rank() + 1);
   // mid-step configuration x^{n-1/2}: the chord velocity of a finite rigid rotation is a rigid
   // velocity field there (no spurious strain), and the strain increments integrate to second order
   x_mid_ = x_ - 0.5 * dt_stress * vpos_;
-#pragma omp parallel for schedule(static) reduction(max : bad) if (e_last - e_first > 256)
-  for (Index e = e_first; e < e_last; ++e) {
+#pragma omp parallel for schedule(static) reduction(max : bad) if (count > 256)
+  for (Index k = 0; k < count; ++k) {
+    const Index e = rank_elements_[static_cast<std::size_t>(k)];
     shell::NodeMatrix x, v, w;
     for (int a = 0; a < 4; ++a) {
       const Index node = mesh.quads(a, e);
@@ -208,23 +242,36 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
     element_force_.col(e) = Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.force.data());
     element_moment_.col(e) = Eigen::Map<const Eigen::Matrix<Real, 12, 1>>(r.moment.data());
   }
-  if (comm_.distributed()) {  // every rank: every element's results (the same bits as one process)
-    bad = static_cast<Index>(comm_.max(static_cast<Real>(bad)));
-    comm_.all_gather_blocks(element_force_.data(), 12, e_count);
-    comm_.all_gather_blocks(element_moment_.data(), 12, e_count);
-    comm_.all_gather_blocks(element_power_.data(), 1, e_count);
-    comm_.all_gather_blocks(element_hourglass_power_.data(), 1, e_count);
-    comm_.all_gather_blocks(element_length_.data(), 1, e_count);
-    comm_.all_gather_blocks(thickness_.data(), 1, e_count);
+  if (comm_.distributed()) {
+    // the owned elements' powers (summed over the ranks: the energies agree with one process to
+    // round-off) and the shortest element (exact), one reduction
+    std::vector<Real> reduced{static_cast<Real>(bad), 0.0, 0.0, -std::numeric_limits<Real>::infinity()};
+    for (Index e : rank_elements_) {
+      if (owns_element_[static_cast<std::size_t>(e)]) reduced[1] += element_power_[e], reduced[2] += element_hourglass_power_[e];
+      reduced[3] = std::max(reduced[3], -element_length_[e]);
+    }
+    const std::vector<Real> all = comm_.all_gather(reduced);  // rank order: the same sums on every rank
+    power_sum_ = hourglass_power_sum_ = 0;
+    Real largest = -std::numeric_limits<Real>::infinity();
+    for (std::size_t r = 0; r < all.size(); r += 4) {
+      bad = std::max(bad, static_cast<Index>(all[r]));
+      power_sum_ += all[r + 1];
+      hourglass_power_sum_ += all[r + 2];
+      largest = std::max(largest, all[r + 3]);
+    }
+    shortest_element_ = -largest;
+  } else {
+    power_sum_ = element_power_.sum();
+    hourglass_power_sum_ = element_hourglass_power_.sum();
+    shortest_element_ = element_length_.minCoeff();
   }
   if (bad >= 0)
     throw AnalysisError(fmt::format("element {} became degenerate or inverted at step {} (time {:.6g}): the run is unstable "
                                     "or the deformation too large for the mesh",
                                     bad, steps_, time_));
-  // gather: every node sums its corners' forces and moments (no atomics, deterministic)
-  const Index n = x_.cols();
-#pragma omp parallel for schedule(static) if (n > 1024)
-  for (Index i = 0; i < n; ++i) {
+  // gather: every node of the block sums its corners' forces and moments (no atomics, deterministic)
+#pragma omp parallel for schedule(static) if (node_last_ - node_first_ > 1024)
+  for (Index i = node_first_; i < node_last_; ++i) {
     Vec3 f = Vec3::Zero(), m = Vec3::Zero();
     for (Index k = incidence_begin_[static_cast<std::size_t>(i)]; k < incidence_begin_[static_cast<std::size_t>(i + 1)]; ++k) {
       const Index entry = incidence_[static_cast<std::size_t>(k)], e = entry / 4;
@@ -235,6 +282,7 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
     f_int_.col(i) = f;
     m_int_.col(i) = m;
   }
+  gather_node_blocks({{f_int_.data(), 3}, {m_int_.data(), 3}});  // several ranks: every node's, on every rank
 }
 
 void MpmAnalysis::prepare_loads() {

@@ -28,6 +28,7 @@
 // A variant of the step is another list (step_stages), not an edit inside one long function.
 #include <array>
 #include <map>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <vector>
@@ -165,7 +166,7 @@ class MpmAnalysis : public Analysis {
   Eigen::Matrix3Xd free_, rotation_free_;  // 1 = free, 0 = prescribed (per component)
   Eigen::Matrix3Xd f_int_, m_int_, f_ext_, m_ext_, f_net_;
   // per-step work arrays, kept to avoid re-allocating them every step
-  Eigen::Matrix3Xd x_mid_, m_net_, node_mass_, momentum_, grid_mass_, grid_momentum_, grid_force_, grid_velocity_, grid_acceleration_;
+  Eigen::Matrix3Xd x_mid_, m_net_, grid_mass_, grid_momentum_, grid_force_, grid_velocity_, grid_acceleration_;
   PointMatrix v_pic_, a_grid_;
   std::vector<Index> incidence_begin_, incidence_;  // node -> element * 4 + corner
 
@@ -177,6 +178,21 @@ class MpmAnalysis : public Analysis {
   };
   std::vector<PreparedLoad> prepared_loads_;
   Eigen::VectorXd transfer_loss_;
+
+  // Several ranks (docs/scaling.md, "MPM decomposition"): this rank's block of nodes [node_first_,
+  // node_last_); the elements that touch it (their forces complete the block's nodal forces; those on the
+  // block's edge are computed by both neighbours); the elements it owns (first node in the block: the
+  // energies and the element-state gather); the grid slots its nodes touch (P2G and grid update).
+  // One process: every node, element and slot.
+  Index node_first_ = 0, node_last_ = 0;
+  std::vector<Index> rank_elements_;
+  std::vector<char> owns_element_;
+  std::vector<Index> rank_slots_;
+  Index rank_slots_version_ = -1;  // grid_.connectivity_version() of rank_slots_
+  Real power_sum_ = 0, hourglass_power_sum_ = 0, shortest_element_ = 0;  // element stage: sums and min over all elements
+  /// Several ranks: every rank gets the node columns that their owners computed, of each (rows x nodes
+  /// array, rows) listed.
+  void gather_node_blocks(std::initializer_list<std::pair<Real*, int>> arrays);
 
   // elements
   Eigen::MatrixXd stress_;                         // 5 * points x E

@@ -82,7 +82,6 @@ void MpmAnalysis::restore_state(const StateReader& in) {
   if (scaled_) {
     require(dyn_mass_.allFinite() && dyn_mass_.minCoeff() > 0 && dyn_inertia_.allFinite() && dyn_inertia_.minCoeff() > 0,
             "fictitious masses");
-    node_mass_.resize(3, 0);  // the grid's copy of the masses is rebuilt
   }
   if (loop_.level_done) {  // written after the level's output point: continue with the next level
     ++loop_.level;

@@ -43,8 +43,8 @@ Real MpmAnalysis::advance(Real load) {
 // 1. element stage: stresses advanced over the step that brought the nodes to x^n; nodal forces gathered.
 void MpmAnalysis::stage_element_forces() {
   compute_internal_forces(dt_previous_);
-  energy_.internal += dt_previous_ * element_power_.sum();
-  energy_.hourglass += dt_previous_ * element_hourglass_power_.sum();
+  energy_.internal += dt_previous_ * power_sum_;
+  energy_.hourglass += dt_previous_ * hourglass_power_sum_;
 }
 
 // 1b. mass-scaled quasi-static only: fictitious masses refreshed, adaptive damping estimate.
@@ -65,7 +65,7 @@ void MpmAnalysis::stage_time_step() {
                                     "(time {:.6g}); reduce mpm.time_step",
                                     vmax, wave_speed_, steps_, time_));
   const Real dt_grid = o.alpha * grid_.cell() / (wave_speed_ + vmax);
-  const Real dt_shell = o.shell_safety * element_->stable_time_step(element_length_.minCoeff());
+  const Real dt_shell = o.shell_safety * element_->stable_time_step(shortest_element_);
   Real dt = std::min(dt_grid, dt_shell);
   dt_control_ = dt_grid < dt_shell ? "grid" : "shell";
   if (o.fixed_time_step > 0) {
@@ -126,13 +126,17 @@ void MpmAnalysis::stage_loads_and_residual() {
 // 4. P2G: mass, momentum and force per free component (eqs (1)-(4); work arrays are members, reused
 // across steps: no per-step allocation).
 void MpmAnalysis::stage_particle_to_grid() {
-  const Index n = x_.cols();
-  if (node_mass_.cols() != n) node_mass_ = (Eigen::Matrix3Xd::Ones(3, n).array().rowwise() * dyn_mass_.transpose().array()).matrix();
-  momentum_.resize(3, n);
-  for (Index i = 0; i < n; ++i) momentum_.col(i) = dyn_mass_[i] * v_.col(i);
-  grid_.scatter(node_mass_, free_, grid_mass_);
-  grid_.scatter(momentum_, free_, grid_momentum_);
-  grid_.scatter(f_net_, free_, grid_force_);
+  const std::vector<Index>* slots = nullptr;
+  if (comm_.distributed()) {
+    // several ranks: the slots this rank's nodes touch, each the whole sum over its corners (every rank
+    // holds every node's mass, velocity and force)
+    if (rank_slots_version_ != grid_.connectivity_version()) {
+      rank_slots_ = grid_.slots_of_corners(node_first_, node_last_);
+      rank_slots_version_ = grid_.connectivity_version();
+    }
+    slots = &rank_slots_;
+  }
+  grid_.scatter_mass_momentum_force(dyn_mass_, v_, f_net_, free_, grid_mass_, grid_momentum_, grid_force_, slots);
 }
 
 // 5. grid update (eqs (5)-(7)); grid nodes without free mass stay at rest.
@@ -143,10 +147,12 @@ void MpmAnalysis::stage_grid_update() {
   Eigen::Matrix3Xd &grid_velocity = grid_velocity_, &grid_acceleration = grid_acceleration_;
   grid_velocity.resize(3, grid_mass.cols());
   grid_acceleration.resize(3, grid_mass.cols());
-  const Index slots = grid_mass.cols();
+  const bool all = !comm_.distributed();  // several ranks: the slots of this rank's nodes
+  const Index slots = all ? grid_mass.cols() : static_cast<Index>(rank_slots_.size());
 #pragma omp parallel for schedule(static) if (slots > 4096)
-  for (Index s = 0; s < slots; ++s)
+  for (Index k = 0; k < slots; ++k)
     for (int a = 0; a < 3; ++a) {
+      const Index s = all ? k : rank_slots_[static_cast<std::size_t>(k)];
       const Real m = grid_mass(a, s);
       if (m > 0) {
         if (central_damping) {
@@ -170,12 +176,12 @@ void MpmAnalysis::stage_grid_to_particle() {
   const bool central_damping = step_.central_damping;
   const Eigen::Matrix3Xd& m_net = m_net_;
   PointMatrix &v_pic = v_pic_, &a_grid = a_grid_;
-  grid_.gather(grid_velocity_, v_pic);
-  grid_.gather(grid_acceleration_, a_grid);
+  grid_.gather(grid_velocity_, v_pic, node_first_, node_last_);  // this rank's nodes (all on one process)
+  grid_.gather(grid_acceleration_, a_grid, node_first_, node_last_);
   const Real flip = problem_.options.flip;
   transfer_loss_.setZero(n);
-#pragma omp parallel for schedule(static) if (n > 1024)
-  for (Index i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) if (node_last_ - node_first_ > 1024)
+  for (Index i = node_first_; i < node_last_; ++i) {
     for (int a = 0; a < 3; ++a) {
       if (free_(a, i) > 0) {
         const Real v_flip = v_(a, i) + dt * a_grid(a, i);
@@ -191,6 +197,8 @@ void MpmAnalysis::stage_grid_to_particle() {
         omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
     }
   }
+  // several ranks: every node's velocities on every rank
+  gather_node_blocks({{v_.data(), 3}, {vpos_.data(), 3}, {omega_.data(), 3}, {transfer_loss_.data(), 1}});
   apply_prescribed(current_load_);
 }
 

@@ -137,5 +137,55 @@ TEST(mpm_BackgroundGrid, TransfersConserveAndDoNotDependOnThreads) {
   EXPECT_FALSE(grid.locate(y));
 }
 
+
+// The one-pass P2G of a step equals three scatter() calls bit for bit; restricted to the slots of a block
+// of corners (several ranks) it gives the same values on those slots, and the restricted G2P the same
+// values on the block's corners.
+TEST(mpm_BackgroundGrid, OnePassAndRestrictedTransfersEqualTheWholeOnes) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<Real> u(0.0, 20.0);
+  const Index n = 3000;
+  PointMatrix x(3, n), v(3, n), f(3, n);
+  Eigen::VectorXd mass(n);
+  Eigen::Matrix3Xd mask = Eigen::Matrix3Xd::Ones(3, n);
+  for (Index c = 0; c < n; ++c) {
+    x.col(c) = Vec3(u(rng), u(rng), 0.1 * u(rng));
+    v.col(c) = Vec3(u(rng), -u(rng), 0.5 * u(rng));
+    f.col(c) = Vec3(-u(rng), u(rng), u(rng));
+    mass[c] = 1.0 + u(rng);
+    if (c % 7 == 0) mask(c % 3, c) = 0.0;
+  }
+  BackgroundGrid grid(Vec3::Constant(-1.0), 0.7);
+  grid.locate(x);
+  Eigen::Matrix3Xd m3(3, n), p3(3, n), gm, gp, gf;
+  for (Index c = 0; c < n; ++c) m3.col(c).setConstant(mass[c]), p3.col(c) = mass[c] * v.col(c);
+  grid.scatter(m3, mask, gm);
+  grid.scatter(p3, mask, gp);
+  grid.scatter(f, mask, gf);
+  Eigen::Matrix3Xd om, op, of;
+  grid.scatter_mass_momentum_force(mass, v, f, mask, om, op, of);
+  EXPECT_EQ(om, gm);
+  EXPECT_EQ(op, gp);
+  EXPECT_EQ(of, gf);
+  const Index first = 1000, last = 2000;
+  const std::vector<Index> slots = grid.slots_of_corners(first, last);
+  ASSERT_GT(slots.size(), 0u);
+  ASSERT_LT(static_cast<Index>(slots.size()), grid.active_nodes());
+  Eigen::Matrix3Xd rm, rp, rf;
+  grid.scatter_mass_momentum_force(mass, v, f, mask, rm, rp, rf, &slots);
+  for (Index s : slots) {
+    EXPECT_EQ(rm.col(s), gm.col(s)) << s;
+    EXPECT_EQ(rp.col(s), gp.col(s)) << s;
+    EXPECT_EQ(rf.col(s), gf.col(s)) << s;
+  }
+  // G2P of the block reads only the block's slots
+  Eigen::Matrix3Xd partial = Eigen::Matrix3Xd::Constant(3, grid.active_nodes(), std::nan(""));
+  for (Index s : slots) partial.col(s) = gf.col(s);
+  PointMatrix whole, block;
+  grid.gather(gf, whole);
+  grid.gather(partial, block, first, last);
+  for (Index c = first; c < last; ++c) EXPECT_EQ(block.col(c), whole.col(c)) << c;
+}
+
 }  // namespace
 }  // namespace lamina::mpm
