@@ -8,9 +8,10 @@ efficiency = loop time on 1 rank / loop time on 2 ranks (1.0 = perfect). lamina 
 - PD: an n x n x n LPS block against 2n x n x n, the lattice, material and steps of
   bench/pd_lps_vs_lammps.py; both storage modes (full: the default at these sizes; lean); loop time = the
   time-step loop (lamina's explicit_loop_s on rank 0, LAMMPS' "Loop time").
-- MPM: the plate of bench/mpm_plate_cycles.py, m x m/2 elements against m x m (element decomposition:
-  the element stage divides, the node and grid stages are done by every rank); loop time = the sum of
-  the step's stage times on rank 0.
+- MPM: the plate of bench/mpm_plate_cycles.py, m x m/2 elements against m x m (node-block decomposition:
+  elements, P2G, grid update and G2P divide; nodal forces and velocities are all-gathered every step and
+  the residual, energies and grid location are done by every rank); loop time = the sum of the step's
+  stage times on rank 0.
 
 Usage: bench/weak_scaling.py [--lamina build/lamina] [--n 41] [--steps 20] [--mpm-elements 100]
                              [--mpm-steps 200] [--no-lammps]
