@@ -18,7 +18,7 @@ PACKAGES=(
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy python3-vtk9
   python3-dev pybind11-dev python3-pytest python3-yaml
-  libopenmpi-dev openmpi-bin libtrilinos-zoltan-dev petsc-dev
+  libopenmpi-dev openmpi-bin libtrilinos-zoltan-dev petsc-dev libslepc-real-dev
 )
 if [ "${1:-}" = "--peers" ]; then
   PACKAGES+=(calculix-ccx lammps)

@@ -20,6 +20,7 @@
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
 #include "solve/petsc_linear_solver.hpp"
+#include "solve/slepc_eigen_solver.hpp"
 
 namespace lamina::pd {
 
@@ -374,21 +375,31 @@ void PeridynamicAnalysis::buckling_modes(int count) {
   const solve::SparseMatrix k_upper = reduce_upper(k0, map, dofs), g_upper = reduce_upper(kg, map, dofs);
   const solve::SparseMatrix minus_g = -g_upper;
   // K0 phi = lambda (-K_G) phi  <=>  (-K_G) phi = (1 / lambda) K0 phi: the largest 1/lambda first
-  // (regular-inverse mode: K0-orthogonal Lanczos with CHOLMOD solves of K0).
-  using OpType = Spectra::SparseSymMatProd<Real, Eigen::Upper>;
-  using BOpType = CholmodRegularInverse;
-  OpType op(minus_g);
-  BOpType bop(k_upper);
-  if (!bop.ok())
-    throw AnalysisError("buckling: the stiffness matrix is not positive definite (rigid-body motion left free?)");
   const int nev = std::min<int>(count, static_cast<int>(dofs) - 1);
-  const int ncv = std::min<int>(std::max(2 * nev + 1, 40), static_cast<int>(dofs));
-  Spectra::SymGEigsSolver<OpType, BOpType, Spectra::GEigsMode::RegularInverse> eigs(op, bop, nev, ncv);
-  eigs.init();
-  eigs.compute(Spectra::SortRule::LargestAlge, 2000, 1e-10);
-  if (eigs.info() != Spectra::CompInfo::Successful) throw AnalysisError("buckling: the eigenvalue solver did not converge");
-  const Eigen::VectorXd mu = eigs.eigenvalues();
-  const Eigen::MatrixXd vectors = eigs.eigenvectors();
+  Eigen::VectorXd mu;
+  Eigen::MatrixXd vectors;
+  const auto type = problem_.solver.type;
+  if (comm_.distributed() || type == LinearSolverChoice::Type::mumps || type == LinearSolverChoice::Type::cg) {
+    // several ranks (or solver: mumps | cg): SLEPc's Krylov-Schur, K0 factorised by MUMPS Cholesky
+    solve::EigenPairs pairs = solve::largest_generalized_eigenpairs(minus_g, k_upper, nev, comm_, 1e-10, 2000);
+    mu = std::move(pairs.values);
+    vectors = std::move(pairs.vectors);
+  } else {
+    // one process: Spectra's regular-inverse mode, K0-orthogonal Lanczos with CHOLMOD solves of K0
+    using OpType = Spectra::SparseSymMatProd<Real, Eigen::Upper>;
+    using BOpType = CholmodRegularInverse;
+    OpType op(minus_g);
+    BOpType bop(k_upper);
+    if (!bop.ok())
+      throw AnalysisError("buckling: the stiffness matrix is not positive definite (rigid-body motion left free?)");
+    const int ncv = std::min<int>(std::max(2 * nev + 1, 40), static_cast<int>(dofs));
+    Spectra::SymGEigsSolver<OpType, BOpType, Spectra::GEigsMode::RegularInverse> eigs(op, bop, nev, ncv);
+    eigs.init();
+    eigs.compute(Spectra::SortRule::LargestAlge, 2000, 1e-10);
+    if (eigs.info() != Spectra::CompInfo::Successful) throw AnalysisError("buckling: the eigenvalue solver did not converge");
+    mu = eigs.eigenvalues();
+    vectors = eigs.eigenvectors();
+  }
   eigenvalues_.clear();
   modes_.clear();
   for (Index k = 0; k < mu.size(); ++k) {

@@ -7,38 +7,11 @@
 
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
+#include "solve/petsc_matrix.hpp"
 
 namespace lamina::solve {
 
-namespace {
-
-/// PETSc, started once per process (on MPI_COMM_WORLD, which lamina's Environment started when
-/// there are several ranks; PETSc starts a one-process MPI itself otherwise) and finalized at exit.
-void ensure_petsc() {
-  static bool started = false;
-  if (started) return;
-  PetscBool initialised = PETSC_FALSE;
-  PetscInitialized(&initialised);
-  if (!initialised) {
-    PetscOptionsSetValue(nullptr, "-options_left", "false");
-    if (PetscInitializeNoArguments() != 0) throw AnalysisError("PETSc could not be initialised");
-    // before lamina's MPI_Finalize (parallel::Environment), or at exit where there is none (Python)
-    static const auto finalize = [] {
-      PetscBool finalized = PETSC_FALSE;
-      PetscFinalized(&finalized);
-      if (!finalized) PetscFinalize();
-    };
-    parallel::Environment::before_finalize(finalize);
-    std::atexit([] { finalize(); });
-  }
-  started = true;
-}
-
-void check(PetscErrorCode code, const char* what) {
-  if (code != 0) throw AnalysisError(fmt::format("PETSc: {} failed (error {})", what, static_cast<int>(code)));
-}
-
-}  // namespace
+using petsc::check;
 
 namespace {
 
@@ -48,52 +21,15 @@ Eigen::VectorXd solve_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b,
                             const parallel::Communicator& comm, SolverReport& report, SystemShares shares, Storage storage,
                             bool positive_definite, int dofs_per_node) {
   const bool mirror = storage == Storage::symmetric_upper;  // the lower triangle from the upper one
-  ensure_petsc();
+  petsc::ensure_started();
   const auto start = Clock::now();
   const PetscInt n = static_cast<PetscInt>(upper.rows());
-  const int ranks = comm.size(), rank = comm.rank();
-  const PetscInt block = n % dofs_per_node == 0 ? dofs_per_node : 1, nodes = n / block;
-  const PetscInt first = block * (nodes * rank / ranks), last = block * (nodes * (rank + 1) / ranks);
+  const int ranks = comm.size();
+  const petsc::RowBlock block = petsc::row_block(n, dofs_per_node, comm);
+  const PetscInt first = block.first, last = block.last;
   // a replicated system: this rank passes the entries of its rows only
   auto passes = [&](Index row) { return shares == SystemShares::summed || (row >= first && row < last); };
-  // preallocation of the rows this rank owns from the pattern it holds: exact when every rank holds
-  // the same pattern (one block pattern with summed shares, or a replicated system); more entries from
-  // other ranks are still accepted (MAT_NEW_NONZERO_ALLOCATION_ERR off)
-  Mat a;
-  check(MatCreate(PETSC_COMM_WORLD, &a), "MatCreate");
-  check(MatSetSizes(a, last - first, last - first, n, n), "MatSetSizes");
-  check(MatSetType(a, MATAIJ), "MatSetType");
-  check(MatSetBlockSize(a, block), "MatSetBlockSize");
-  {
-    std::vector<PetscInt> diagonal(static_cast<std::size_t>(last - first), 0), off(static_cast<std::size_t>(last - first), 0);
-    for (Index col = 0; col < upper.outerSize(); ++col)
-      for (SparseMatrix::InnerIterator it(upper, col); it; ++it) {
-        const Index r = it.row();
-        auto count = [&](Index row, Index c) {
-          if (row < first || row >= last) return;
-          auto& bucket = (c >= first && c < last) ? diagonal : off;
-          ++bucket[static_cast<std::size_t>(row - first)];
-        };
-        count(r, col);
-        if (mirror && r != col) count(col, r);
-      }
-    // every rank's shares have the same pattern when they come from one block pattern (efg, mpfem): the
-    // local count is the row's count
-    check(MatMPIAIJSetPreallocation(a, 0, diagonal.data(), 0, off.data()), "MatMPIAIJSetPreallocation");
-    check(MatSeqAIJSetPreallocation(a, 0, diagonal.data()), "MatSeqAIJSetPreallocation");
-    check(MatSetOption(a, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE), "MatSetOption");
-  }
-  for (Index col = 0; col < upper.outerSize(); ++col)
-    for (SparseMatrix::InnerIterator it(upper, col); it; ++it) {
-      const PetscInt r = static_cast<PetscInt>(it.row()), c = static_cast<PetscInt>(col);
-      const PetscScalar v = it.value();
-      if (v == 0.0 || !passes(r)) continue;
-      check(MatSetValues(a, 1, &r, 1, &c, &v, ADD_VALUES), "MatSetValues");
-      if (mirror && r != c) check(MatSetValues(a, 1, &c, 1, &r, &v, ADD_VALUES), "MatSetValues");
-    }
-  check(MatAssemblyBegin(a, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
-  check(MatAssemblyEnd(a, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
-  check(MatSetOption(a, MAT_SYMMETRIC, mirror ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
+  Mat a = petsc::assemble_matrix(upper, mirror, shares, block);
   check(MatSetOption(a, MAT_SPD, mirror && positive_definite ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
 
   Vec rhs, x;
