@@ -6,7 +6,8 @@
   - each VTU frame is a .pvtu of N pieces whose points add up to the body's nodes;
   - the mpm runs (element decomposition) and the pd ADR runs (the seed's plate on the plate model, a 3D
     bar lattice; forces split) are those of one process, bit for bit;
-  - a pd and an mpm run on 2 ranks restarted from a checkpoint repeat the uninterrupted history bit for bit;
+  - a pd explicit, a pd ADR and an mpm run on 2 ranks restarted from a checkpoint repeat the uninterrupted
+    history bit for bit;
   - the pd plate model under explicit dynamics (forces split) is that of one process, bit for bit;
   - computations every rank repeats (efg collocation and Lagrange multipliers, mls_fit) are those of one
     process, bit for bit; a solve that runs on one process only (solver: cholmod) exits 2 on 2 ranks;
@@ -126,11 +127,14 @@ for case, variants in history_cases:
 
 # checkpoint / restart on 2 ranks: a run with checkpoints, its newest checkpoint removed, --restart from
 # the older one: the history of the uninterrupted run, bit for bit, frames (.pvtu and pieces) kept
-for name in ("block_initial_velocity.yaml", "mpm_plate_dynamic.yaml"):
-    case = os.path.join(case_dir, name)
+restart_cases = [(os.path.join(case_dir, "block_initial_velocity.yaml"), ["--set", "output.checkpoint.every=3"]),
+                 (os.path.join(case_dir, "mpm_plate_dynamic.yaml"), ["--set", "output.checkpoint.every=3"]),
+                 (os.path.join(source, "validation/pd_plate_tension/case.yaml"),  # ADR, force decomposition
+                  ["--set", "output.checkpoint.every=1", "--set", "pd.quasi_static.increments=4"])]
+for case, extra in restart_cases:
+    name = os.path.basename(case) if os.path.dirname(case) == case_dir else case.split("/")[-2]
     label = f"{name} restart on 2 ranks"
     full = os.path.join(work, name + "_checkpointed")
-    extra = ["--set", "output.checkpoint.every=3"]
     r = run(case, 2, full, extra)
     checkpoints = sorted(f for f in os.listdir(full) if f.startswith("checkpoint_")) if r.returncode == 0 else []
     if len(checkpoints) < 2:
