@@ -91,9 +91,7 @@ const parallel::Communicator& working_communicator(const EfgProblem& problem, co
 
 EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const parallel::Communicator& comm)
     : problem_(std::move(problem)), probes_(std::move(probes)), comm_(working_communicator(problem_, comm)) {
-  if (comm_.distributed() && problem_.options.solver.type == LinearSolverChoice::Type::cholmod)
-    throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} ranks (cholmod runs on one process)", comm_.size()),
-                            "cholmod");
+  problem_.options.solver.check_ranks(comm_.size());
   for (const auto& p : probes_) {
     const std::string where = "probes." + p.name;
     if (p.field == "displacement") {

@@ -258,8 +258,7 @@ void EfgAnalysis::solve_galerkin(OutputSink* sink) {
     const Eigen::VectorXd x = solve::solve_general(A, rhs, solver_report_);
     u_ = x.head(3 * n);
     multipliers_ = x.tail(multipliers);
-  } else if (comm_.distributed() || (problem_.options.solver.type != LinearSolverChoice::Type::automatic &&
-                                      problem_.options.solver.type != LinearSolverChoice::Type::cholmod)) {
+  } else if (problem_.options.solver.uses_petsc(comm_.distributed())) {
     u_ = symmetric ? solve::solve_symmetric_petsc(K, f, problem_.options.solver, comm_, solver_report_)
                    : solve::solve_general_petsc(K, f, problem_.options.solver, comm_, solver_report_);  // vci
   } else if (symmetric) {

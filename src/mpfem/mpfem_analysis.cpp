@@ -59,9 +59,7 @@ Real PlaneMaterial::out_of_plane(const Eigen::Vector3d& strain) const {
 
 MpfemAnalysis::MpfemAnalysis(MpfemProblem problem, std::vector<Probe> probes, const parallel::Communicator& comm)
     : problem_(std::move(problem)), probes_(std::move(probes)), comm_(comm) {
-  if (comm_.distributed() && problem_.options.solver.type == LinearSolverChoice::Type::cholmod)
-    throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} ranks (cholmod runs on one process)", comm_.size()),
-                            "cholmod");
+  problem_.options.solver.check_ranks(comm_.size());
   const auto start = Clock::now();
   const Index n = problem_.layout.positions.cols();
   if (problem_.materials.empty()) throw InputError("materials", "at least one linear_elastic material", "none");
@@ -373,8 +371,7 @@ void MpfemAnalysis::assemble_linear() {
 
 Eigen::VectorXd MpfemAnalysis::solve_system(const solve::SparseMatrix& upper, const Eigen::VectorXd& rhs,
                                             const solve::SolverOptions& options, bool positive_definite) {
-  const auto type = problem_.options.solver.type;
-  if (comm_.distributed() || type == LinearSolverChoice::Type::mumps || type == LinearSolverChoice::Type::cg)
+  if (problem_.options.solver.uses_petsc(comm_.distributed()))
     return solve::solve_symmetric_petsc(upper, rhs, problem_.options.solver, comm_, solver_report_,
                                         solve::SystemShares::replicated, positive_definite, 2);
   return solve::solve_symmetric(upper, rhs, solver_report_, options);

@@ -204,9 +204,9 @@ bool PeridynamicAnalysis::lean_bond_storage() const {
 }
 
 void PeridynamicAnalysis::check_distributable() const {
-  if (problem_.analysis == PdAnalysisKind::linear_static && problem_.solver.type == LinearSolverChoice::Type::cholmod)
-    throw SingleProcessOnly("solver.type", fmt::format("mumps or cg on {} ranks (cholmod runs on one process)", comm_.size()),
-                            "cholmod");
+  // the linear static and buckling solves go through PETSc / SLEPc on several ranks
+  if (problem_.analysis == PdAnalysisKind::linear_static || problem_.analysis == PdAnalysisKind::buckling)
+    problem_.solver.check_ranks(comm_.size());
 }
 
 bool PeridynamicAnalysis::plate_lattice() const {
@@ -343,9 +343,7 @@ void PeridynamicAnalysis::check_unloaded_stiffness(const solve::SparseMatrix& k0
 void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {
   sink->output_point(0, 0.0, 0.0);
   solve::SparseMatrix k0;
-  const auto type = problem_.solver.type;
-  u_ = linear_solution(k0, false,
-                       comm_.distributed() || type == LinearSolverChoice::Type::mumps || type == LinearSolverChoice::Type::cg);
+  u_ = linear_solution(k0, false, problem_.solver.uses_petsc(comm_.distributed()));
   state_ = model_->state_of(u_, true);
   internal_force_ = model_->internal_force(*state_);
   external_force_ = external_force(1.0);
@@ -378,8 +376,7 @@ void PeridynamicAnalysis::buckling_modes(int count) {
   const int nev = std::min<int>(count, static_cast<int>(dofs) - 1);
   Eigen::VectorXd mu;
   Eigen::MatrixXd vectors;
-  const auto type = problem_.solver.type;
-  if (comm_.distributed() || type == LinearSolverChoice::Type::mumps || type == LinearSolverChoice::Type::cg) {
+  if (problem_.solver.uses_petsc(comm_.distributed())) {
     // several ranks (or solver: mumps | cg): SLEPc's Krylov-Schur, K0 factorised by MUMPS Cholesky
     solve::EigenPairs pairs = solve::largest_generalized_eigenpairs(minus_g, k_upper, nev, comm_, 1e-10, 2000);
     mu = std::move(pairs.values);

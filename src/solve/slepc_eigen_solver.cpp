@@ -4,7 +4,6 @@
 #include <slepceps.h>
 
 #include <algorithm>
-#include <numeric>
 #include <vector>
 
 #include "core/error.hpp"
@@ -93,18 +92,7 @@ EigenPairs largest_generalized_eigenpairs(const SparseMatrix& a_upper, const Spa
   VecDestroy(&all);
   VecDestroy(&x);
   destroy();
-  // the largest first (SLEPc's order for EPS_LARGEST_REAL; sorted again to be sure)
-  std::vector<Index> order(static_cast<std::size_t>(nev));
-  std::iota(order.begin(), order.end(), Index{0});
-  std::sort(order.begin(), order.end(), [&](Index i, Index j) { return out.values[i] > out.values[j]; });
-  EigenPairs sorted;
-  sorted.values.resize(nev);
-  sorted.vectors.resize(n, nev);
-  for (Index k = 0; k < nev; ++k) {
-    sorted.values[k] = out.values[order[static_cast<std::size_t>(k)]];
-    sorted.vectors.col(k) = out.vectors.col(order[static_cast<std::size_t>(k)]);
-  }
-  return sorted;
+  return out;  // the largest first: SLEPc's order for EPS_LARGEST_REAL
 }
 
 }  // namespace lamina::solve
