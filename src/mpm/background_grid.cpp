@@ -12,6 +12,7 @@ namespace {
 
 constexpr std::int64_t kOffset = std::int64_t(1) << 20;
 constexpr std::int64_t kMask = (std::int64_t(1) << 21) - 1;
+constexpr std::int64_t kNotLocated = -1;  // cell_of_corner_ of a corner locate() left out (never a packed key)
 
 std::int64_t pack(std::int64_t i, std::int64_t j, std::int64_t k) {
   return ((i + kOffset) & kMask) | (((j + kOffset) & kMask) << 21) | (((k + kOffset) & kMask) << 42);
@@ -27,14 +28,15 @@ Vec3 BackgroundGrid::node_position(Index slot) const {
   return origin_ + cell_ * Vec3(static_cast<Real>(i), static_cast<Real>(j), static_cast<Real>(k));
 }
 
-bool BackgroundGrid::locate(const PointMatrix& x) {
+bool BackgroundGrid::locate(const PointMatrix& x, const std::vector<char>* include) {
   const Index n = x.cols();
   const std::size_t entries = static_cast<std::size_t>(n) * kNodesPerCorner;
   const bool resized = cell_of_corner_.size() != static_cast<std::size_t>(n);
   if (resized) {
-    cell_of_corner_.assign(static_cast<std::size_t>(n), -1);
+    cell_of_corner_.assign(static_cast<std::size_t>(n), kNotLocated);
     weight_.assign(entries, 0.0);
     key_of_entry_.assign(entries, 0);
+    slot_of_entry_.assign(entries, 0);
   }
   int changed = resized ? 1 : 0;
   corner_moved_.resize(static_cast<std::size_t>(n));
@@ -42,6 +44,16 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
   bool finite = true;
 #pragma omp parallel for schedule(static) reduction(| : changed) reduction(&& : finite) if (n > 1024)
   for (Index c = 0; c < n; ++c) {
+    const auto cs = static_cast<std::size_t>(c);
+    corner_moved_[cs] = 0;
+    if (include && !(*include)[cs]) {  // left out: no entries, no weights
+      if (cell_of_corner_[cs] != kNotLocated) {
+        cell_of_corner_[cs] = kNotLocated;
+        corner_moved_[cs] = 1;
+        changed = 1;
+      }
+      continue;
+    }
     const Vec3 s = (x.col(c) - origin_) * inv;
     if (!s.allFinite() || s.cwiseAbs().maxCoeff() > static_cast<Real>(kOffset - 2)) {
       finite = false;
@@ -51,10 +63,9 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
                        k = static_cast<std::int64_t>(std::floor(s.z()));
     const Real fx = s.x() - static_cast<Real>(i), fy = s.y() - static_cast<Real>(j), fz = s.z() - static_cast<Real>(k);
     const std::int64_t key = pack(i, j, k);
-    corner_moved_[static_cast<std::size_t>(c)] = 0;
-    if (key != cell_of_corner_[static_cast<std::size_t>(c)]) {
-      cell_of_corner_[static_cast<std::size_t>(c)] = key;
-      corner_moved_[static_cast<std::size_t>(c)] = 1;
+    if (key != cell_of_corner_[cs]) {
+      cell_of_corner_[cs] = key;
+      corner_moved_[cs] = 1;
       changed = 1;
       for (int a = 0; a < kNodesPerCorner; ++a)
         key_of_entry_[static_cast<std::size_t>(c * kNodesPerCorner + a)] = pack(i + (a & 1), j + ((a >> 1) & 1), k + ((a >> 2) & 1));
@@ -64,41 +75,37 @@ bool BackgroundGrid::locate(const PointMatrix& x) {
       weight_[static_cast<std::size_t>(c * kNodesPerCorner + a)] = wx * wy * wz;
     }
   }
-  if (!finite) throw AnalysisError("a shell node left the background grid's range (non-finite or runaway position)");
+  if (!finite) check_range(x);  // throws
   if (!changed) return false;
-  // (key, entry) pairs in sorted order (unique pairs: the order is deterministic). After the first
-  // sort only the entries of corners that changed cell are re-sorted and merged into the rest.
-  if (resized || key_entry_.size() != entries) {
-    key_entry_.resize(entries);
-    for (std::size_t e = 0; e < entries; ++e) key_entry_[e] = {key_of_entry_[e], static_cast<Index>(e)};
-    std::sort(key_entry_.begin(), key_entry_.end());
-  } else {
-    kept_.clear();
-    moved_.clear();
-    for (const auto& ke : key_entry_) {
-      if (corner_moved_[static_cast<std::size_t>(ke.second / kNodesPerCorner)])
-        moved_.emplace_back(key_of_entry_[static_cast<std::size_t>(ke.second)], ke.second);
-      else
-        kept_.push_back(ke);
-    }
-    std::sort(moved_.begin(), moved_.end());
-    std::merge(kept_.begin(), kept_.end(), moved_.begin(), moved_.end(), key_entry_.begin());
-  }
-  sorted_entries_.resize(entries);
-  for (std::size_t e = 0; e < entries; ++e) sorted_entries_[e] = key_entry_[e].second;
-  slot_of_entry_.assign(entries, 0);
+  // (key, entry) pairs of the located corners in sorted order (unique pairs: the order is deterministic).
+  // After the first sort only the entries of corners that changed cell (or joined) are re-sorted and
+  // merged into the rest; those of corners that left are dropped.
+  kept_.clear();
+  moved_.clear();
+  if (!resized)
+    for (const auto& ke : key_entry_)
+      if (!corner_moved_[static_cast<std::size_t>(ke.second / kNodesPerCorner)]) kept_.push_back(ke);
+  for (Index c = 0; c < n; ++c)
+    if ((resized || corner_moved_[static_cast<std::size_t>(c)]) && cell_of_corner_[static_cast<std::size_t>(c)] != kNotLocated)
+      for (Index e = c * kNodesPerCorner; e < (c + 1) * kNodesPerCorner; ++e) moved_.emplace_back(key_of_entry_[static_cast<std::size_t>(e)], e);
+  std::sort(moved_.begin(), moved_.end());
+  key_entry_.resize(kept_.size() + moved_.size());
+  std::merge(kept_.begin(), kept_.end(), moved_.begin(), moved_.end(), key_entry_.begin());
+  const std::size_t located = key_entry_.size();
+  sorted_entries_.resize(located);
+  for (std::size_t e = 0; e < located; ++e) sorted_entries_[e] = key_entry_[e].second;
   slot_begin_.clear();
   slot_key_.clear();
-  for (std::size_t s = 0; s < entries; ++s) {
+  for (std::size_t s = 0; s < located; ++s) {
     const Index entry = sorted_entries_[s];
-    const auto key = key_of_entry_[static_cast<std::size_t>(entry)];
+    const auto key = key_entry_[s].first;
     if (slot_key_.empty() || slot_key_.back() != key) {
       slot_key_.push_back(key);
       slot_begin_.push_back(static_cast<Index>(s));
     }
     slot_of_entry_[static_cast<std::size_t>(entry)] = static_cast<Index>(slot_key_.size()) - 1;
   }
-  slot_begin_.push_back(static_cast<Index>(entries));
+  slot_begin_.push_back(static_cast<Index>(located));
   ++connectivity_version_;
   return true;
 }
@@ -120,15 +127,13 @@ void BackgroundGrid::scatter(const PointMatrix& q, const Eigen::Matrix3Xd& mask,
 void BackgroundGrid::scatter_mass_momentum_force(const Eigen::VectorXd& mass, const PointMatrix& velocity,
                                                  const PointMatrix& force, const Eigen::Matrix3Xd& mask,
                                                  Eigen::Matrix3Xd& grid_mass, Eigen::Matrix3Xd& grid_momentum,
-                                                 Eigen::Matrix3Xd& grid_force, const std::vector<Index>* slots) const {
+                                                 Eigen::Matrix3Xd& grid_force) const {
   const Index active = active_nodes();
   grid_mass.resize(3, active);
   grid_momentum.resize(3, active);
   grid_force.resize(3, active);
-  const Index count = slots ? static_cast<Index>(slots->size()) : active;
-#pragma omp parallel for schedule(static) if (count > 4096)
-  for (Index k = 0; k < count; ++k) {
-    const Index s = slots ? (*slots)[static_cast<std::size_t>(k)] : k;
+#pragma omp parallel for schedule(static) if (active > 4096)
+  for (Index s = 0; s < active; ++s) {
     Vec3 m = Vec3::Zero(), p = Vec3::Zero(), f = Vec3::Zero();
     for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
       const Index c = *e / kNodesPerCorner;
@@ -144,14 +149,13 @@ void BackgroundGrid::scatter_mass_momentum_force(const Eigen::VectorXd& mass, co
   }
 }
 
-std::vector<Index> BackgroundGrid::slots_of_corners(Index first, Index last) const {
-  std::vector<char> touched(static_cast<std::size_t>(active_nodes()), 0);
-  for (Index c = first; c < last; ++c)
-    for (int a = 0; a < kNodesPerCorner; ++a) touched[static_cast<std::size_t>(slot(c, a))] = 1;
-  std::vector<Index> slots;
-  for (Index s = 0; s < active_nodes(); ++s)
-    if (touched[static_cast<std::size_t>(s)]) slots.push_back(s);
-  return slots;
+void BackgroundGrid::check_range(const PointMatrix& x) const {
+  const Real inv = 1.0 / cell_;
+  for (Index c = 0; c < x.cols(); ++c) {
+    const Vec3 s = (x.col(c) - origin_) * inv;
+    if (!s.allFinite() || s.cwiseAbs().maxCoeff() > static_cast<Real>(kOffset - 2))
+      throw AnalysisError("a shell node left the background grid's range (non-finite or runaway position)");
+  }
 }
 
 void BackgroundGrid::gather(const Eigen::Matrix3Xd& grid, PointMatrix& q, Index first, Index last) const {

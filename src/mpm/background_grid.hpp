@@ -24,8 +24,11 @@ class BackgroundGrid {
   const Vec3& origin() const { return origin_; }
 
   /// Locate the corners x (3 x N): weights always, connectivity when a corner changed cell.
-  /// Returns true when the active node set was rebuilt.
-  bool locate(const PointMatrix& x);
+  /// include (size N, optional): only the corners marked non-zero are located and scatter; the others
+  /// have no entries and no weights (several ranks: the corners near a rank's block, docs/scaling.md).
+  /// Every slot's sum runs over its located corners in corner order, so a slot all of whose corners are
+  /// included sums the same bits as with every corner located. Returns true when the slots were rebuilt.
+  bool locate(const PointMatrix& x, const std::vector<char>* include = nullptr);
 
   Index active_nodes() const { return static_cast<Index>(slot_begin_.size()) - 1; }
   /// Weight S_I(x_c) of the k-th grid node of corner c (k < 8) and that node's slot.
@@ -43,16 +46,16 @@ class BackgroundGrid {
   void gather(const Eigen::Matrix3Xd& grid, PointMatrix& q) const;
 
   /// P2G of a step in one pass over the entries: mass m_c, momentum m_c v_c and force f_c per free
-  /// component (mask), the same sums as three scatter() calls; slots: only those (null: all).
+  /// component (mask), the same sums as three scatter() calls.
   void scatter_mass_momentum_force(const Eigen::VectorXd& mass, const PointMatrix& velocity, const PointMatrix& force,
                                    const Eigen::Matrix3Xd& mask, Eigen::Matrix3Xd& grid_mass, Eigen::Matrix3Xd& grid_momentum,
-                                   Eigen::Matrix3Xd& grid_force, const std::vector<Index>* slots = nullptr) const;
+                                   Eigen::Matrix3Xd& grid_force) const;
 
-  // Several ranks (a block of corners per rank, docs/scaling.md): the same sums, restricted.
-  /// Counts the connectivity rebuilds of locate(): a list of slots is valid while this is unchanged.
+  /// Counts the connectivity rebuilds of locate().
   Index connectivity_version() const { return connectivity_version_; }
-  /// The slots that the corners [first, last) scatter to, ascending.
-  std::vector<Index> slots_of_corners(Index first, Index last) const;
+  /// Throws AnalysisError when a corner of x is non-finite or outside the grid's index range (the
+  /// check locate() makes, here for every corner however locate() is restricted).
+  void check_range(const PointMatrix& x) const;
   /// gather() of the corners [first, last) only (q is sized to all corners; the others unspecified).
   void gather(const Eigen::Matrix3Xd& grid, PointMatrix& q, Index first, Index last) const;
 

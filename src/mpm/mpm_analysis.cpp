@@ -114,8 +114,12 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
     for (int a = 0; a < 4; ++a) incidence_[static_cast<std::size_t>(fill[static_cast<std::size_t>(mesh.quads(a, e))]++)] = 4 * e + a;
 
   // several ranks: the node block, the elements touching it, the elements it owns
-  node_first_ = comm_.block_begin(n, comm_.rank());
-  node_last_ = comm_.block_begin(n, comm_.rank() + 1);
+  const Index chunks = (n + kSumChunk - 1) / kSumChunk;
+  node_block_begins_.resize(static_cast<std::size_t>(comm_.size()) + 1);
+  for (int r = 0; r <= comm_.size(); ++r)
+    node_block_begins_[static_cast<std::size_t>(r)] = std::min(n, kSumChunk * comm_.block_begin(chunks, r));
+  node_first_ = node_block_begins_[static_cast<std::size_t>(comm_.rank())];
+  node_last_ = node_block_begins_[static_cast<std::size_t>(comm_.rank()) + 1];
   owns_element_.assign(static_cast<std::size_t>(e_count), 0);
   for (Index e = 0; e < e_count; ++e) {
     auto mine = [&](Index node) { return node >= node_first_ && node < node_last_; };
@@ -130,7 +134,7 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
   thickness_ = Eigen::VectorXd::Constant(e_count, mesh.thickness);
   element_power_ = element_hourglass_power_ = element_length_ = Eigen::VectorXd::Zero(e_count);
   element_force_ = element_moment_ = Eigen::Matrix<Real, 12, Eigen::Dynamic>::Zero(12, e_count);
-  grid_.locate(x_);
+  locate_grid();
   prepare_loads();
   dyn_mass_ = mass_;
   dyn_inertia_ = inertia_;
@@ -173,7 +177,30 @@ void MpmAnalysis::gather_node_blocks(std::initializer_list<std::pair<Real*, int>
   // one in-place all-gather per array: measured faster than packing them into one message (the copies
   // cost more than the extra latency at these sizes)
   if (!comm_.distributed()) return;
-  for (const auto& [data, rows] : arrays) comm_.all_gather_blocks(data, rows, x_.cols());
+  for (const auto& [data, rows] : arrays) comm_.all_gather_blocks(data, rows, node_block_begins_);
+}
+
+void MpmAnalysis::locate_grid() {
+  if (!comm_.distributed()) {
+    grid_.locate(x_);
+    return;
+  }
+  grid_.check_range(x_);  // on every rank alike (locate() sees only the nodes near the block)
+  // a node sharing a grid node with a block node lies within two cells of it in each direction
+  Vec3 low = Vec3::Constant(std::numeric_limits<Real>::infinity()), high = -low;
+  for (Index i = node_first_; i < node_last_; ++i) {
+    low = low.cwiseMin(x_.col(i));
+    high = high.cwiseMax(x_.col(i));
+  }
+  const Vec3 margin = Vec3::Constant(2.01 * grid_.cell());
+  low -= margin;
+  high += margin;
+  const Index n = x_.cols();
+  near_block_.resize(static_cast<std::size_t>(n));
+  for (Index c = 0; c < n; ++c)
+    near_block_[static_cast<std::size_t>(c)] =
+        (x_.col(c).array() >= low.array()).all() && (x_.col(c).array() <= high.array()).all() ? 1 : 0;
+  grid_.locate(x_, &near_block_);
 }
 
 void MpmAnalysis::compute_fictitious_masses() {
@@ -186,21 +213,20 @@ void MpmAnalysis::compute_fictitious_masses() {
 
 Real MpmAnalysis::adaptive_damping_coefficient() const {
   // u: the increment since the level started; local stiffness k_d = (f_d^n - f_d^{n-1}) / (m_d dt v_d^{n-1/2})
-  const Index n = x_.cols();
-  Real numerator = 0, denominator = 0;
-  for (Index i = 0; i < n; ++i)
+  const auto [numerator, denominator] = node_sums<2>([&](Index i, std::array<Real, 2>& s) {
     for (int a = 0; a < 3; ++a) {
       if (free_(a, i) > 0) {
         const Real u = x_(a, i) - level_start_(a, i), v = vpos_(a, i);
-        denominator += u * u;
-        if (v != 0) numerator += u * u * (f_int_(a, i) - f_int_previous_(a, i)) / (dyn_mass_[i] * dt_previous_ * v);
+        s[1] += u * u;
+        if (v != 0) s[0] += u * u * (f_int_(a, i) - f_int_previous_(a, i)) / (dyn_mass_[i] * dt_previous_ * v);
       }
       if (rotation_free_(a, i) > 0) {
         const Real u = theta_(a, i), w = omega_(a, i);
-        denominator += u * u;
-        if (w != 0) numerator += u * u * (m_int_(a, i) - m_int_previous_(a, i)) / (dyn_inertia_[i] * dt_previous_ * w);
+        s[1] += u * u;
+        if (w != 0) s[0] += u * u * (m_int_(a, i) - m_int_previous_(a, i)) / (dyn_inertia_[i] * dt_previous_ * w);
       }
     }
+  });
   if (!(denominator > 0) || !(numerator > 0)) return 0.0;
   return std::min(1.9, 2.0 * std::sqrt(numerator / denominator));
 }

@@ -26,6 +26,7 @@
 //  update       (eq (9)) x_c += dt sum_I S_I(x_c) v_I (the corners are shared by the domains, which
 //               therefore stay gap-free); grid connectivity refreshed.
 // A variant of the step is another list (step_stages), not an edit inside one long function.
+#include <algorithm>
 #include <array>
 #include <map>
 #include <initializer_list>
@@ -180,15 +181,25 @@ class MpmAnalysis : public Analysis {
   Eigen::VectorXd transfer_loss_;
 
   // Several ranks (docs/scaling.md, "MPM decomposition"): this rank's block of nodes [node_first_,
-  // node_last_); the elements that touch it (their forces complete the block's nodal forces; those on the
-  // block's edge are computed by both neighbours); the elements it owns (first node in the block: the
-  // energies and the element-state gather); the grid slots its nodes touch (P2G and grid update).
-  // One process: every node, element and slot.
+  // node_last_), whole chunks of kSumChunk nodes (node_block_begins_: every rank's); the elements that
+  // touch it (their forces complete the block's nodal forces; those on the block's edge are computed by
+  // both neighbours); the elements it owns (first node in the block: the energies and the element-state
+  // gather); the nodes near the block (within two grid cells of its bounding box: every node that shares
+  // a grid node with it), the only ones the rank's grid locates. One process: every node and element.
+  static constexpr Index kSumChunk = 64;
   Index node_first_ = 0, node_last_ = 0;
+  std::vector<Index> node_block_begins_;
   std::vector<Index> rank_elements_;
   std::vector<char> owns_element_;
-  std::vector<Index> rank_slots_;
-  Index rank_slots_version_ = -1;  // grid_.connectivity_version() of rank_slots_
+  std::vector<char> near_block_;
+  /// Locates the nodes in the background grid: all of them on one process, those near the block on several
+  /// ranks (the same P2G sums on the grid nodes the block touches, hence the same G2P on the block).
+  void locate_grid();
+  /// Sums of Q per-node terms (terms(i, sums) adds node i's) over every node, in chunks of kSumChunk
+  /// nodes whose partial sums are added in chunk order: the same bits on one process and on any number of
+  /// ranks (each sums its block's chunks; the partials are all-gathered). Collective.
+  template <int Q, class Terms>
+  std::array<Real, Q> node_sums(const Terms& terms) const;
   Real power_sum_ = 0, hourglass_power_sum_ = 0, shortest_element_ = 0;  // element stage: sums and min over all elements
   /// Several ranks: every rank gets the node columns that their owners computed, of each (rows x nodes
   /// array, rows) listed.
@@ -221,5 +232,21 @@ class MpmAnalysis : public Analysis {
   template <class Self, class Archive>
   static void state_fields(Self& self, Archive& archive);
 };
+
+template <int Q, class Terms>
+std::array<Real, Q> MpmAnalysis::node_sums(const Terms& terms) const {
+  const Index n = x_.cols(), chunks = (n + kSumChunk - 1) / kSumChunk;
+  std::vector<Real> partial(static_cast<std::size_t>(Q * chunks), 0.0);
+  for (Index k = node_first_ / kSumChunk; k * kSumChunk < node_last_; ++k) {
+    std::array<Real, Q> chunk{};
+    for (Index i = k * kSumChunk; i < std::min(n, (k + 1) * kSumChunk); ++i) terms(i, chunk);
+    std::copy(chunk.begin(), chunk.end(), partial.begin() + Q * k);
+  }
+  comm_.all_gather_blocks(partial.data(), Q, chunks);  // the chunk blocks of node_block_begins_
+  std::array<Real, Q> total{};
+  for (Index k = 0; k < chunks; ++k)
+    for (int q = 0; q < Q; ++q) total[static_cast<std::size_t>(q)] += partial[static_cast<std::size_t>(Q * k + q)];
+  return total;
+}
 
 }  // namespace lamina::mpm

@@ -89,7 +89,7 @@ void MpmAnalysis::restore_state(const StateReader& in) {
     loop_.level_done = false;
   }
   try {
-    grid_.locate(x_);
+    locate_grid();
   } catch (const AnalysisError& e) {
     throw StateError(std::string("checkpoint record 'mpm.x': ") + e.what());
   }

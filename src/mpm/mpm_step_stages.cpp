@@ -90,21 +90,19 @@ void MpmAnalysis::stage_loads_and_residual() {
   f_net_ = f_ext_ - f_int_;
   m_net_ = m_ext_ - m_int_;
   {
-    Real r2 = 0, ext2 = 0, int2 = 0;
-    for (Index i = 0; i < n; ++i) {
-      r2 += f_net_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
-            m_net_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
-      ext2 += f_ext_.col(i).squaredNorm() / mass_[i] + m_ext_.col(i).squaredNorm() / inertia_[i];
-      int2 += f_int_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+    // adaptive damping: the damping force c m v joins the imbalance, so that a node swinging through
+    // equilibrium (zero residual at full velocity) does not end the level
+    const bool damping_force = scaled_ && o.adaptive_damping && c > 0;
+    const auto [r2, ext2, int2] = node_sums<3>([&](Index i, std::array<Real, 3>& s) {
+      s[0] += f_net_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+              m_net_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+      if (damping_force)
+        s[0] += (c * dyn_mass_[i]) * (c * dyn_mass_[i]) * v_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
+                (c * dyn_inertia_[i]) * (c * dyn_inertia_[i]) * omega_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
+      s[1] += f_ext_.col(i).squaredNorm() / mass_[i] + m_ext_.col(i).squaredNorm() / inertia_[i];
+      s[2] += f_int_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
               m_int_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
-    }
-    if (scaled_ && o.adaptive_damping && c > 0) {
-      // adaptive damping: the damping force c m v joins the imbalance, so that a node swinging through
-      // equilibrium (zero residual at full velocity) does not end the level
-      for (Index i = 0; i < n; ++i)
-        r2 += (c * dyn_mass_[i]) * (c * dyn_mass_[i]) * v_.col(i).cwiseProduct(free_.col(i)).squaredNorm() / mass_[i] +
-              (c * dyn_inertia_[i]) * (c * dyn_inertia_[i]) * omega_.col(i).cwiseProduct(rotation_free_.col(i)).squaredNorm() / inertia_[i];
-    }
+    });
     const Real scale = std::max({ext2, int2, std::numeric_limits<Real>::min()});
     residual_ratio_ = std::sqrt(r2 / scale);
   }
@@ -126,17 +124,9 @@ void MpmAnalysis::stage_loads_and_residual() {
 // 4. P2G: mass, momentum and force per free component (eqs (1)-(4); work arrays are members, reused
 // across steps: no per-step allocation).
 void MpmAnalysis::stage_particle_to_grid() {
-  const std::vector<Index>* slots = nullptr;
-  if (comm_.distributed()) {
-    // several ranks: the slots this rank's nodes touch, each the whole sum over its corners (every rank
-    // holds every node's mass, velocity and force)
-    if (rank_slots_version_ != grid_.connectivity_version()) {
-      rank_slots_ = grid_.slots_of_corners(node_first_, node_last_);
-      rank_slots_version_ = grid_.connectivity_version();
-    }
-    slots = &rank_slots_;
-  }
-  grid_.scatter_mass_momentum_force(dyn_mass_, v_, f_net_, free_, grid_mass_, grid_momentum_, grid_force_, slots);
+  // several ranks: every grid node of the rank's grid; those the block's nodes touch get the whole sum
+  // (every rank holds every node's mass, velocity and force; the grid holds the nodes near the block)
+  grid_.scatter_mass_momentum_force(dyn_mass_, v_, f_net_, free_, grid_mass_, grid_momentum_, grid_force_);
 }
 
 // 5. grid update (eqs (5)-(7)); grid nodes without free mass stay at rest.
@@ -147,12 +137,10 @@ void MpmAnalysis::stage_grid_update() {
   Eigen::Matrix3Xd &grid_velocity = grid_velocity_, &grid_acceleration = grid_acceleration_;
   grid_velocity.resize(3, grid_mass.cols());
   grid_acceleration.resize(3, grid_mass.cols());
-  const bool all = !comm_.distributed();  // several ranks: the slots of this rank's nodes
-  const Index slots = all ? grid_mass.cols() : static_cast<Index>(rank_slots_.size());
+  const Index slots = grid_mass.cols();
 #pragma omp parallel for schedule(static) if (slots > 4096)
-  for (Index k = 0; k < slots; ++k)
+  for (Index s = 0; s < slots; ++s)
     for (int a = 0; a < 3; ++a) {
-      const Index s = all ? k : rank_slots_[static_cast<std::size_t>(k)];
       const Real m = grid_mass(a, s);
       if (m > 0) {
         if (central_damping) {
@@ -198,7 +186,7 @@ void MpmAnalysis::stage_grid_to_particle() {
     }
   }
   // several ranks: every node's velocities on every rank
-  gather_node_blocks({{v_.data(), 3}, {vpos_.data(), 3}, {omega_.data(), 3}, {transfer_loss_.data(), 1}});
+  gather_node_blocks({{v_.data(), 3}, {vpos_.data(), 3}, {omega_.data(), 3}});
   apply_prescribed(current_load_);
 }
 
@@ -207,13 +195,14 @@ void MpmAnalysis::stage_damping_and_energy() {
   const MpmOptions& o = problem_.options;
   const Index n = x_.cols();
   const Real dt = step_.dt, c = step_.damping;
-  Real kinetic = 0.0;
-  for (Index i = 0; i < n; ++i) kinetic += 0.5 * (dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm());
-  if (c > 0) {
-    Real p = 0;
-    for (Index i = 0; i < n; ++i) p += c * (dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm());
-    energy_.damping += dt * p;
-  }
+  // kinetic energy, damping power, transfer loss (this rank's block; node_sums adds the blocks)
+  auto [kinetic, damping_power, transfer] = node_sums<3>([&](Index i, std::array<Real, 3>& s) {
+    const Real twice = dyn_mass_[i] * v_.col(i).squaredNorm() + dyn_inertia_[i] * omega_.col(i).squaredNorm();
+    s[0] += 0.5 * twice;
+    s[1] += c * twice;
+    s[2] += transfer_loss_[i];
+  });
+  if (c > 0) energy_.damping += dt * damping_power;
   // kinetic damping: the option, or the fallback of adaptive damping where its estimate is zero (a
   // negative local stiffness, e.g. past a limit point: the motion would stay undamped)
   const bool kinetic_on = o.kinetic_damping || (scaled_ && o.adaptive_damping && c == 0.0);
@@ -225,27 +214,25 @@ void MpmAnalysis::stage_damping_and_energy() {
         omega_(a, i) = 0.0;
       }
     kinetic_previous_ = 0.0;
-    kinetic = 0.0;
-    for (Index i = 0; i < n; ++i) kinetic += 0.5 * dyn_mass_[i] * v_.col(i).squaredNorm();
+    kinetic = node_sums<1>([&](Index i, std::array<Real, 1>& s) { s[0] += 0.5 * dyn_mass_[i] * v_.col(i).squaredNorm(); })[0];
   } else {
     kinetic_previous_ = kinetic;
   }
   // external work over this step (loads at n, displacement with the velocity that moves the nodes,
   // after kinetic damping: a step whose velocities were zeroed at a peak moves nothing and does no work)
-  {
-    Real w = 0;
-    for (Index i = 0; i < n; ++i) w += f_ext_.col(i).dot(vpos_.col(i)) + m_ext_.col(i).dot(omega_.col(i));
-    energy_.external += dt * w;
-  }
+  const Real work = node_sums<1>([&](Index i, std::array<Real, 1>& s) {
+    s[0] += f_ext_.col(i).dot(vpos_.col(i)) + m_ext_.col(i).dot(omega_.col(i));
+  })[0];
+  energy_.external += dt * work;
   energy_.kinetic = kinetic;
-  energy_.transfer += transfer_loss_.sum();
+  energy_.transfer += transfer;
 }
 
 // 8. positions (eq (9)) and grid connectivity; a non-finite energy stops the run.
 void MpmAnalysis::stage_position_update() {
   x_ += step_.dt * vpos_;
   if (scaled_) theta_ += step_.dt * omega_;
-  grid_.locate(x_);
+  locate_grid();
   if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
     throw AnalysisError(fmt::format("non-finite energy at step {} (time {:.6g}): the run is unstable", steps_, time_));
 }

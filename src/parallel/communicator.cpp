@@ -120,10 +120,17 @@ std::vector<Index> Communicator::all_gather_lists(const std::vector<Index>& valu
 
 void Communicator::all_gather_blocks(Real* data, int rows, Index count) const {
   if (!distributed()) return;
+  std::vector<Index> begins(static_cast<std::size_t>(size_) + 1);
+  for (int r = 0; r <= size_; ++r) begins[static_cast<std::size_t>(r)] = block_begin(count, r);
+  all_gather_blocks(data, rows, begins);
+}
+
+void Communicator::all_gather_blocks(Real* data, int rows, const std::vector<Index>& begins) const {
+  if (!distributed()) return;
   std::vector<int> counts(static_cast<std::size_t>(size_)), offsets(static_cast<std::size_t>(size_));
-  for (int r = 0; r < size_; ++r) {
-    offsets[static_cast<std::size_t>(r)] = static_cast<int>(rows * block_begin(count, r));
-    counts[static_cast<std::size_t>(r)] = static_cast<int>(rows * (block_begin(count, r + 1) - block_begin(count, r)));
+  for (std::size_t r = 0; r < static_cast<std::size_t>(size_); ++r) {
+    offsets[r] = static_cast<int>(rows * begins[r]);
+    counts[r] = static_cast<int>(rows * (begins[r + 1] - begins[r]));
   }
   MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, counts.data(), offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
 }

@@ -54,6 +54,8 @@ class Communicator {
   /// A rows x count column-major array of which each rank filled its block of columns (block_begin):
   /// afterwards every rank holds all columns. Collective.
   void all_gather_blocks(Real* data, int rows, Index count) const;
+  /// The same with given blocks: rank r filled columns [begins[r], begins[r + 1]) (begins: size() + 1).
+  void all_gather_blocks(Real* data, int rows, const std::vector<Index>& begins) const;
   /// Rank 0's value on every rank.
   std::string broadcast(const std::string& value) const;
   void barrier() const;

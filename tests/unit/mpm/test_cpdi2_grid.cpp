@@ -138,9 +138,9 @@ TEST(mpm_BackgroundGrid, TransfersConserveAndDoNotDependOnThreads) {
 }
 
 
-// The one-pass P2G of a step equals three scatter() calls bit for bit; restricted to the slots of a block
-// of corners (several ranks) it gives the same values on those slots, and the restricted G2P the same
-// values on the block's corners.
+// The one-pass P2G of a step equals three scatter() calls bit for bit. A grid that locates only the
+// corners within two cells of a block's bounding box (several ranks) gives the block's corners the same
+// G2P values, bit for bit, also after corners moved, left and joined that set.
 TEST(mpm_BackgroundGrid, OnePassAndRestrictedTransfersEqualTheWholeOnes) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<Real> u(0.0, 20.0);
@@ -149,13 +149,15 @@ TEST(mpm_BackgroundGrid, OnePassAndRestrictedTransfersEqualTheWholeOnes) {
   Eigen::VectorXd mass(n);
   Eigen::Matrix3Xd mask = Eigen::Matrix3Xd::Ones(3, n);
   for (Index c = 0; c < n; ++c) {
-    x.col(c) = Vec3(u(rng), u(rng), 0.1 * u(rng));
+    // corners ordered along x: the block [first, last) is a slab
+    x.col(c) = Vec3(20.0 * static_cast<Real>(c) / static_cast<Real>(n), u(rng), 0.1 * u(rng));
     v.col(c) = Vec3(u(rng), -u(rng), 0.5 * u(rng));
     f.col(c) = Vec3(-u(rng), u(rng), u(rng));
     mass[c] = 1.0 + u(rng);
     if (c % 7 == 0) mask(c % 3, c) = 0.0;
   }
-  BackgroundGrid grid(Vec3::Constant(-1.0), 0.7);
+  const Real cell = 0.7;
+  BackgroundGrid grid(Vec3::Constant(-1.0), cell), near(Vec3::Constant(-1.0), cell);
   grid.locate(x);
   Eigen::Matrix3Xd m3(3, n), p3(3, n), gm, gp, gf;
   for (Index c = 0; c < n; ++c) m3.col(c).setConstant(mass[c]), p3.col(c) = mass[c] * v.col(c);
@@ -167,24 +169,39 @@ TEST(mpm_BackgroundGrid, OnePassAndRestrictedTransfersEqualTheWholeOnes) {
   EXPECT_EQ(om, gm);
   EXPECT_EQ(op, gp);
   EXPECT_EQ(of, gf);
+
   const Index first = 1000, last = 2000;
-  const std::vector<Index> slots = grid.slots_of_corners(first, last);
-  ASSERT_GT(slots.size(), 0u);
-  ASSERT_LT(static_cast<Index>(slots.size()), grid.active_nodes());
-  Eigen::Matrix3Xd rm, rp, rf;
-  grid.scatter_mass_momentum_force(mass, v, f, mask, rm, rp, rf, &slots);
-  for (Index s : slots) {
-    EXPECT_EQ(rm.col(s), gm.col(s)) << s;
-    EXPECT_EQ(rp.col(s), gp.col(s)) << s;
-    EXPECT_EQ(rf.col(s), gf.col(s)) << s;
-  }
-  // G2P of the block reads only the block's slots
-  Eigen::Matrix3Xd partial = Eigen::Matrix3Xd::Constant(3, grid.active_nodes(), std::nan(""));
-  for (Index s : slots) partial.col(s) = gf.col(s);
-  PointMatrix whole, block;
-  grid.gather(gf, whole);
-  grid.gather(partial, block, first, last);
-  for (Index c = first; c < last; ++c) EXPECT_EQ(block.col(c), whole.col(c)) << c;
+  std::vector<char> include(static_cast<std::size_t>(n));
+  auto compare = [&](const char* when) {
+    grid.locate(x);
+    Vec3 low = x.block(0, first, 3, last - first).rowwise().minCoeff(), high = x.block(0, first, 3, last - first).rowwise().maxCoeff();
+    low.array() -= 2.01 * cell;
+    high.array() += 2.01 * cell;
+    Index included = 0;
+    for (Index c = 0; c < n; ++c) {
+      include[static_cast<std::size_t>(c)] = (x.col(c).array() >= low.array()).all() && (x.col(c).array() <= high.array()).all();
+      included += include[static_cast<std::size_t>(c)];
+    }
+    ASSERT_LT(included, n) << when;
+    near.locate(x, &include);
+    ASSERT_LT(near.active_nodes(), grid.active_nodes()) << when;
+    Eigen::Matrix3Xd wm, wp, wf, nm, np, nf;
+    grid.scatter_mass_momentum_force(mass, v, f, mask, wm, wp, wf);
+    near.scatter_mass_momentum_force(mass, v, f, mask, nm, np, nf);
+    PointMatrix whole, block;
+    grid.gather(wf, whole);
+    near.gather(nf, block, first, last);
+    for (Index c = first; c < last; ++c) ASSERT_EQ(block.col(c), whole.col(c)) << when << " corner " << c;
+    grid.gather(wp, whole);
+    near.gather(np, block, first, last);
+    for (Index c = first; c < last; ++c) ASSERT_EQ(block.col(c), whole.col(c)) << when << " corner " << c;
+  };
+  compare("first locate");
+  // move every corner by up to two cells: some change cell, some leave the set near the block, some join
+  for (Index c = 0; c < n; ++c) x.col(c) += Vec3(2.0 * cell * (u(rng) / 10.0 - 1.0), 0.3 * u(rng), 0.0);
+  compare("after a move");
+  for (Index c = 0; c < n; c += 3) x(0, c) += 0.05;
+  compare("after a small move");
 }
 
 }  // namespace
