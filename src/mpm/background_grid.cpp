@@ -150,12 +150,11 @@ void BackgroundGrid::scatter_mass_momentum_force(const Eigen::VectorXd& mass, co
 }
 
 void BackgroundGrid::check_range(const PointMatrix& x) const {
-  const Real inv = 1.0 / cell_;
-  for (Index c = 0; c < x.cols(); ++c) {
-    const Vec3 s = (x.col(c) - origin_) * inv;
-    if (!s.allFinite() || s.cwiseAbs().maxCoeff() > static_cast<Real>(kOffset - 2))
-      throw AnalysisError("a shell node left the background grid's range (non-finite or runaway position)");
-  }
+  if (x.cols() == 0) return;
+  const Real limit = static_cast<Real>(kOffset - 2);  // the extreme corners decide (as locate()'s test per corner)
+  const Vec3 low = (x.rowwise().minCoeff() - origin_) / cell_, high = (x.rowwise().maxCoeff() - origin_) / cell_;
+  if (!x.allFinite() || (low.array() < -limit).any() || (high.array() > limit).any())
+    throw AnalysisError("a shell node left the background grid's range (non-finite or runaway position)");
 }
 
 void BackgroundGrid::gather(const Eigen::Matrix3Xd& grid, PointMatrix& q, Index first, Index last) const {

@@ -185,7 +185,8 @@ void MpmAnalysis::locate_grid() {
     grid_.locate(x_);
     return;
   }
-  grid_.check_range(x_);  // on every rank alike (locate() sees only the nodes near the block)
+  // every node in the grid's range, checked on every rank alike (locate() sees only the nodes near the block)
+  grid_.check_range(x_);
   // a node sharing a grid node with a block node lies within two cells of it in each direction
   Vec3 low = Vec3::Constant(std::numeric_limits<Real>::infinity()), high = -low;
   for (Index i = node_first_; i < node_last_; ++i) {
@@ -244,14 +245,14 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
   Index bad = -1;
   // mid-step configuration x^{n-1/2}: the chord velocity of a finite rigid rotation is a rigid
   // velocity field there (no spurious strain), and the strain increments integrate to second order
-  x_mid_ = x_ - 0.5 * dt_stress * vpos_;
+  const Real half_step = 0.5 * dt_stress;
 #pragma omp parallel for schedule(static) reduction(max : bad) if (count > 256)
   for (Index k = 0; k < count; ++k) {
     const Index e = rank_elements_[static_cast<std::size_t>(k)];
     shell::NodeMatrix x, v, w;
     for (int a = 0; a < 4; ++a) {
       const Index node = mesh.quads(a, e);
-      x.col(a) = x_mid_.col(node);
+      x.col(a) = x_.col(node) - half_step * vpos_.col(node);
       v.col(a) = vpos_.col(node);
       w.col(a) = omega_.col(node);
     }

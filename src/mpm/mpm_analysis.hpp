@@ -167,7 +167,7 @@ class MpmAnalysis : public Analysis {
   Eigen::Matrix3Xd free_, rotation_free_;  // 1 = free, 0 = prescribed (per component)
   Eigen::Matrix3Xd f_int_, m_int_, f_ext_, m_ext_, f_net_;
   // per-step work arrays, kept to avoid re-allocating them every step
-  Eigen::Matrix3Xd x_mid_, m_net_, grid_mass_, grid_momentum_, grid_force_, grid_velocity_, grid_acceleration_;
+  Eigen::Matrix3Xd m_net_, grid_mass_, grid_momentum_, grid_force_, grid_velocity_, grid_acceleration_;
   PointMatrix v_pic_, a_grid_;
   std::vector<Index> incidence_begin_, incidence_;  // node -> element * 4 + corner
 
