@@ -120,6 +120,19 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
     node_block_begins_[static_cast<std::size_t>(r)] = std::min(n, kSumChunk * comm_.block_begin(chunks, r));
   node_first_ = node_block_begins_[static_cast<std::size_t>(comm_.rank())];
   node_last_ = node_block_begins_[static_cast<std::size_t>(comm_.rank()) + 1];
+  element_nodes_of_rank_.assign(static_cast<std::size_t>(comm_.size()), std::vector<char>());
+  if (comm_.distributed())
+    for (int q = 0; q < comm_.size(); ++q) {
+      auto& nodes = element_nodes_of_rank_[static_cast<std::size_t>(q)];
+      nodes.assign(static_cast<std::size_t>(n), 0);
+      const Index first = node_block_begins_[static_cast<std::size_t>(q)], last = node_block_begins_[static_cast<std::size_t>(q) + 1];
+      for (Index e = 0; e < e_count; ++e) {
+        bool touches = false;
+        for (int a = 0; a < 4; ++a) touches = touches || (mesh.quads(a, e) >= first && mesh.quads(a, e) < last);
+        if (touches)
+          for (int a = 0; a < 4; ++a) nodes[static_cast<std::size_t>(mesh.quads(a, e))] = 1;
+      }
+    }
   owns_element_.assign(static_cast<std::size_t>(e_count), 0);
   for (Index e = 0; e < e_count; ++e) {
     auto mine = [&](Index node) { return node >= node_first_ && node < node_last_; };
@@ -180,28 +193,59 @@ void MpmAnalysis::gather_node_blocks(std::initializer_list<std::pair<Real*, int>
   for (const auto& [data, rows] : arrays) comm_.all_gather_blocks(data, rows, node_block_begins_);
 }
 
+void MpmAnalysis::exchange_halo(std::initializer_list<std::pair<Real*, int>> arrays) {
+  if (comm_.distributed()) comm_.exchange_columns(arrays, halo_send_, halo_receive_);
+}
+
+void MpmAnalysis::gather_state() {
+  gather_element_state();
+  gather_node_blocks({{v_.data(), 3}, {omega_.data(), 3}, {f_int_.data(), 3}, {m_int_.data(), 3}});
+  if (scaled_) gather_node_blocks({{theta_.data(), 3}, {f_int_previous_.data(), 3}, {m_int_previous_.data(), 3}});
+}
+
 void MpmAnalysis::locate_grid() {
   if (!comm_.distributed()) {
     grid_.locate(x_);
     return;
   }
-  // every node in the grid's range, checked on every rank alike (locate() sees only the nodes near the block)
-  grid_.check_range(x_);
-  // a node sharing a grid node with a block node lies within two cells of it in each direction
-  Vec3 low = Vec3::Constant(std::numeric_limits<Real>::infinity()), high = -low;
-  for (Index i = node_first_; i < node_last_; ++i) {
-    low = low.cwiseMin(x_.col(i));
-    high = high.cwiseMax(x_.col(i));
-  }
-  const Vec3 margin = Vec3::Constant(2.01 * grid_.cell());
-  low -= margin;
-  high += margin;
+  grid_.check_range(x_);  // on every rank alike (locate() sees only the nodes near the block)
+  // each rank's box: a node sharing a grid node with a block node lies within two cells of it in each
+  // direction. Every rank holds every position, so every rank finds every rank's box alike.
+  const int ranks = comm_.size(), me = comm_.rank();
   const Index n = x_.cols();
+  std::vector<Vec3> low(static_cast<std::size_t>(ranks)), high(static_cast<std::size_t>(ranks));
+  const Vec3 margin = Vec3::Constant(2.01 * grid_.cell());
+  for (int q = 0; q < ranks; ++q) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
+    for (Index i = node_block_begins_[static_cast<std::size_t>(q)]; i < node_block_begins_[static_cast<std::size_t>(q) + 1]; ++i) {
+      lo = lo.cwiseMin(x_.col(i));
+      hi = hi.cwiseMax(x_.col(i));
+    }
+    low[static_cast<std::size_t>(q)] = lo - margin;
+    high[static_cast<std::size_t>(q)] = hi + margin;
+  }
+  auto near = [&](int q, Index c) {
+    return (x_.col(c).array() >= low[static_cast<std::size_t>(q)].array()).all() &&
+           (x_.col(c).array() <= high[static_cast<std::size_t>(q)].array()).all();
+  };
   near_block_.resize(static_cast<std::size_t>(n));
-  for (Index c = 0; c < n; ++c)
-    near_block_[static_cast<std::size_t>(c)] =
-        (x_.col(c).array() >= low.array()).all() && (x_.col(c).array() <= high.array()).all() ? 1 : 0;
+  for (Index c = 0; c < n; ++c) near_block_[static_cast<std::size_t>(c)] = near(me, c) ? 1 : 0;
   grid_.locate(x_, &near_block_);
+  // the halo: what this rank needs of rank q's block (near this block, or on this block's elements), and
+  // what rank q needs of this block (the same test with q's box and elements)
+  halo_send_.assign(static_cast<std::size_t>(ranks), {});
+  halo_receive_.assign(static_cast<std::size_t>(ranks), {});
+  const auto& mine = element_nodes_of_rank_[static_cast<std::size_t>(me)];
+  for (int q = 0; q < ranks; ++q) {
+    if (q == me) continue;
+    auto& receive = halo_receive_[static_cast<std::size_t>(q)];
+    for (Index i = node_block_begins_[static_cast<std::size_t>(q)]; i < node_block_begins_[static_cast<std::size_t>(q) + 1]; ++i)
+      if (near_block_[static_cast<std::size_t>(i)] || mine[static_cast<std::size_t>(i)]) receive.push_back(i);
+    auto& send = halo_send_[static_cast<std::size_t>(q)];
+    const auto& theirs = element_nodes_of_rank_[static_cast<std::size_t>(q)];
+    for (Index i = node_first_; i < node_last_; ++i)
+      if (near(q, i) || theirs[static_cast<std::size_t>(i)]) send.push_back(i);
+  }
 }
 
 void MpmAnalysis::compute_fictitious_masses() {
@@ -309,7 +353,7 @@ void MpmAnalysis::compute_internal_forces(Real dt_stress) {
     f_int_.col(i) = f;
     m_int_.col(i) = m;
   }
-  gather_node_blocks({{f_int_.data(), 3}, {m_int_.data(), 3}});  // several ranks: every node's, on every rank
+  exchange_halo({{f_int_.data(), 3}});  // several ranks: the halo's forces (P2G of the nodes near the block)
 }
 
 void MpmAnalysis::prepare_loads() {
@@ -432,7 +476,7 @@ Real MpmAnalysis::node_velocity_limit() const { return 10.0 * wave_speed_; }
 void MpmAnalysis::run(OutputSink& sink) {
   const MpmOptions& o = problem_.options;
   if (!resumed_) {
-    gather_element_state();
+    gather_state();
     sink.output_point(0, 0.0, 0.0);
     loop_ = RunLoop{};
   }
@@ -471,7 +515,7 @@ void MpmAnalysis::run(OutputSink& sink) {
       level_step_counts_.push_back(static_cast<int>(level_steps));
       sink.progress(static_cast<Real>(level) / o.load_levels,
                     fmt::format("level {}/{} residual {:.2e} steps {}", level, o.load_levels, residual_ratio_, steps_));
-      gather_element_state();
+      gather_state();
       sink.output_point(steps_, time_, load);
       loop_.level_done = true;  // a checkpoint here resumes at the next level
       sink.safe_point();
@@ -483,7 +527,7 @@ void MpmAnalysis::run(OutputSink& sink) {
       advance(time_ / o.end_time);
       if (steps_ >= o.max_steps) throw AnalysisError(fmt::format("more than {} steps before the end time", o.max_steps));
       if (time_ >= target * (1 - 1e-12)) {
-        gather_element_state();
+        gather_state();
         sink.output_point(steps_, time_, std::min(1.0, time_ / o.end_time));
         sink.progress(time_ / o.end_time, fmt::format("t {:.4g} dt {:.3g}", time_, dt_));
         ++loop_.next_output;

@@ -81,7 +81,7 @@ class MpmAnalysis : public Analysis {
   std::vector<std::string> warnings() const override;
   /// Checkpoints after any step (docs/restart.md).
   bool can_checkpoint() const override { return true; }
-  void before_checkpoint() override { gather_element_state(); }
+  void before_checkpoint() override { gather_state(); }
   void save_state(StateWriter& out) const override;
   void restore_state(const StateReader& in) override;
 
@@ -192,8 +192,12 @@ class MpmAnalysis : public Analysis {
   std::vector<Index> rank_elements_;
   std::vector<char> owns_element_;
   std::vector<char> near_block_;
+  std::vector<std::vector<char>> element_nodes_of_rank_;  // per rank: the nodes of the elements touching its block
+  std::vector<std::vector<Index>> halo_send_, halo_receive_;  // per rank: the nodes this rank sends it / gets from it
   /// Locates the nodes in the background grid: all of them on one process, those near the block on several
-  /// ranks (the same P2G sums on the grid nodes the block touches, hence the same G2P on the block).
+  /// ranks (the same P2G sums on the grid nodes the block touches, hence the same G2P on the block); and
+  /// the halo: the other ranks' nodes near the block or on its elements (their forces and velocities are
+  /// exchanged every step), found from the positions every rank holds, so sender and receiver agree.
   void locate_grid();
   /// Sums of Q per-node terms (terms(i, sums) adds node i's) over every node, in chunks of kSumChunk
   /// nodes whose partial sums are added in chunk order: the same bits on one process and on any number of
@@ -204,6 +208,11 @@ class MpmAnalysis : public Analysis {
   /// Several ranks: every rank gets the node columns that their owners computed, of each (rows x nodes
   /// array, rows) listed.
   void gather_node_blocks(std::initializer_list<std::pair<Real*, int>> arrays);
+  /// Several ranks: the halo columns of each (rows x nodes array, rows) listed, from their owners.
+  void exchange_halo(std::initializer_list<std::pair<Real*, int>> arrays);
+  /// Several ranks: the whole state on every rank (element state and every node's velocities, rotation
+  /// rates and internal forces), before output points and checkpoints.
+  void gather_state();
 
   // elements
   Eigen::MatrixXd stress_;                         // 5 * points x E

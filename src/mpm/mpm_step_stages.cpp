@@ -185,8 +185,10 @@ void MpmAnalysis::stage_grid_to_particle() {
         omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
     }
   }
-  // several ranks: every node's velocities on every rank
-  gather_node_blocks({{v_.data(), 3}, {vpos_.data(), 3}, {omega_.data(), 3}});
+  // several ranks: every node's position velocity on every rank (the positions stay whole everywhere),
+  // the halo's velocities and rotation rates (P2G and the elements of the block)
+  gather_node_blocks({{vpos_.data(), 3}});
+  exchange_halo({{v_.data(), 3}, {omega_.data(), 3}});
   apply_prescribed(current_load_);
 }
 

@@ -135,6 +135,47 @@ void Communicator::all_gather_blocks(Real* data, int rows, const std::vector<Ind
   MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, counts.data(), offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
 }
 
+void Communicator::exchange_columns(std::initializer_list<std::pair<Real*, int>> arrays,
+                                    const std::vector<std::vector<Index>>& send,
+                                    const std::vector<std::vector<Index>>& receive) const {
+  if (!distributed()) return;
+  int per_node = 0;
+  for (const auto& a : arrays) per_node += a.second;
+  thread_local std::vector<std::vector<Real>> outgoing, incoming;
+  outgoing.resize(static_cast<std::size_t>(size_));
+  incoming.resize(static_cast<std::size_t>(size_));
+  std::vector<MPI_Request> requests;
+  for (int q = 0; q < size_; ++q) {
+    const auto& list = receive[static_cast<std::size_t>(q)];
+    if (q == rank_ || list.empty()) continue;
+    auto& buffer = incoming[static_cast<std::size_t>(q)];
+    buffer.resize(list.size() * static_cast<std::size_t>(per_node));
+    requests.emplace_back();
+    MPI_Irecv(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, q, 71, MPI_COMM_WORLD, &requests.back());
+  }
+  for (int q = 0; q < size_; ++q) {
+    const auto& list = send[static_cast<std::size_t>(q)];
+    if (q == rank_ || list.empty()) continue;
+    auto& buffer = outgoing[static_cast<std::size_t>(q)];
+    buffer.resize(list.size() * static_cast<std::size_t>(per_node));
+    Real* out = buffer.data();
+    for (Index node : list)
+      for (const auto& [data, rows] : arrays)
+        for (int r = 0; r < rows; ++r) *out++ = data[rows * node + r];
+    requests.emplace_back();
+    MPI_Isend(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, q, 71, MPI_COMM_WORLD, &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  for (int q = 0; q < size_; ++q) {
+    const auto& list = receive[static_cast<std::size_t>(q)];
+    if (q == rank_ || list.empty()) continue;
+    const Real* in = incoming[static_cast<std::size_t>(q)].data();
+    for (Index node : list)
+      for (const auto& [data, rows] : arrays)
+        for (int r = 0; r < rows; ++r) data[rows * node + r] = *in++;
+  }
+}
+
 std::string Communicator::broadcast(const std::string& value) const {
   if (!distributed()) return value;
   int length = static_cast<int>(value.size());

@@ -4,6 +4,8 @@
 // gathers and broadcasts. Reductions are plain MPI_Allreduce: their result depends on the rank count
 // in the last bits only (docs/scaling.md).
 #include <functional>
+#include <initializer_list>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -56,6 +58,12 @@ class Communicator {
   void all_gather_blocks(Real* data, int rows, Index count) const;
   /// The same with given blocks: rank r filled columns [begins[r], begins[r + 1]) (begins: size() + 1).
   void all_gather_blocks(Real* data, int rows, const std::vector<Index>& begins) const;
+  /// Point-to-point refresh of copies: sends to each rank q the columns send[q] of every (data, rows)
+  /// array (column-major, rows x nodes) and overwrites the columns receive[q] with q's. The lists (one
+  /// per rank, ascending) must pair up: receive[q] here is send[this rank] on q. Collective among the
+  /// ranks with non-empty lists.
+  void exchange_columns(std::initializer_list<std::pair<Real*, int>> arrays, const std::vector<std::vector<Index>>& send,
+                        const std::vector<std::vector<Index>>& receive) const;
   /// Rank 0's value on every rank.
   std::string broadcast(const std::string& value) const;
   void barrier() const;
