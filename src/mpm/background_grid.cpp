@@ -149,6 +149,12 @@ void BackgroundGrid::scatter_mass_momentum_force(const Eigen::VectorXd& mass, co
   }
 }
 
+bool BackgroundGrid::covers(const Vec3& lowest, const Vec3& highest) const {
+  const Real limit = static_cast<Real>(kOffset - 2);
+  const Vec3 low = (lowest - origin_) / cell_, high = (highest - origin_) / cell_;
+  return low.allFinite() && high.allFinite() && (low.array() >= -limit).all() && (high.array() <= limit).all();
+}
+
 void BackgroundGrid::check_range(const PointMatrix& x) const {
   if (x.cols() == 0) return;
   const Real limit = static_cast<Real>(kOffset - 2);  // the extreme corners decide (as locate()'s test per corner)

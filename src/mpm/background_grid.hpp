@@ -56,6 +56,8 @@ class BackgroundGrid {
   /// Throws AnalysisError when a corner of x is non-finite or outside the grid's index range (the
   /// check locate() makes, here for every corner however locate() is restricted).
   void check_range(const PointMatrix& x) const;
+  /// Whether every point of the box [lowest, highest] lies in the grid's index range.
+  bool covers(const Vec3& lowest, const Vec3& highest) const;
   /// gather() of the corners [first, last) only (q is sized to all corners; the others unspecified).
   void gather(const Eigen::Matrix3Xd& grid, PointMatrix& q, Index first, Index last) const;
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -208,40 +209,53 @@ void MpmAnalysis::locate_grid() {
     grid_.locate(x_);
     return;
   }
-  grid_.check_range(x_);  // on every rank alike (locate() sees only the nodes near the block)
   // each rank's box: a node sharing a grid node with a block node lies within two cells of it in each
-  // direction. Every rank holds every position, so every rank finds every rank's box alike.
+  // direction. Every rank holds every position, so every rank finds every rank's box alike. One pass
+  // over the coordinates (flat, 3 per node), which also checks them for the grid's range on every rank
+  // alike (locate() sees only the nodes near the block).
   const int ranks = comm_.size(), me = comm_.rank();
   const Index n = x_.cols();
-  std::vector<Vec3> low(static_cast<std::size_t>(ranks)), high(static_cast<std::size_t>(ranks));
-  const Vec3 margin = Vec3::Constant(2.01 * grid_.cell());
+  const Real* xs = x_.data();
+  constexpr Real kInfinity = std::numeric_limits<Real>::infinity();
+  std::vector<std::array<Real, 6>> box(static_cast<std::size_t>(ranks));  // low x, y, z, high x, y, z
+  Real sum = 0;
   for (int q = 0; q < ranks; ++q) {
-    Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
-    for (Index i = node_block_begins_[static_cast<std::size_t>(q)]; i < node_block_begins_[static_cast<std::size_t>(q) + 1]; ++i) {
-      lo = lo.cwiseMin(x_.col(i));
-      hi = hi.cwiseMax(x_.col(i));
-    }
-    low[static_cast<std::size_t>(q)] = lo - margin;
-    high[static_cast<std::size_t>(q)] = hi + margin;
+    std::array<Real, 6> b{kInfinity, kInfinity, kInfinity, -kInfinity, -kInfinity, -kInfinity};
+    for (Index i = node_block_begins_[static_cast<std::size_t>(q)]; i < node_block_begins_[static_cast<std::size_t>(q) + 1]; ++i)
+      for (int d = 0; d < 3; ++d) {
+        const Real v = xs[3 * i + d];
+        b[static_cast<std::size_t>(d)] = std::min(b[static_cast<std::size_t>(d)], v);
+        b[static_cast<std::size_t>(d) + 3] = std::max(b[static_cast<std::size_t>(d) + 3], v);
+        sum += v;
+      }
+    const Real margin = 2.01 * grid_.cell();
+    for (std::size_t d = 0; d < 3; ++d) b[d] -= margin, b[d + 3] += margin;
+    box[static_cast<std::size_t>(q)] = b;
   }
+  Vec3 lowest = Vec3::Constant(kInfinity), highest = -lowest;
+  for (const auto& b : box) lowest = lowest.cwiseMin(Vec3(b[0], b[1], b[2])), highest = highest.cwiseMax(Vec3(b[3], b[4], b[5]));
+  if (!std::isfinite(sum) || !grid_.covers(lowest, highest)) grid_.check_range(x_);  // throws for the culprit
   auto near = [&](int q, Index c) {
-    return (x_.col(c).array() >= low[static_cast<std::size_t>(q)].array()).all() &&
-           (x_.col(c).array() <= high[static_cast<std::size_t>(q)].array()).all();
+    const auto& b = box[static_cast<std::size_t>(q)];
+    const Real* p = xs + 3 * c;
+    return p[0] >= b[0] && p[0] <= b[3] && p[1] >= b[1] && p[1] <= b[4] && p[2] >= b[2] && p[2] <= b[5];
   };
   near_block_.resize(static_cast<std::size_t>(n));
   for (Index c = 0; c < n; ++c) near_block_[static_cast<std::size_t>(c)] = near(me, c) ? 1 : 0;
   grid_.locate(x_, &near_block_);
   // the halo: what this rank needs of rank q's block (near this block, or on this block's elements), and
   // what rank q needs of this block (the same test with q's box and elements)
-  halo_send_.assign(static_cast<std::size_t>(ranks), {});
-  halo_receive_.assign(static_cast<std::size_t>(ranks), {});
+  halo_send_.resize(static_cast<std::size_t>(ranks));
+  halo_receive_.resize(static_cast<std::size_t>(ranks));
   const auto& mine = element_nodes_of_rank_[static_cast<std::size_t>(me)];
   for (int q = 0; q < ranks; ++q) {
     if (q == me) continue;
     auto& receive = halo_receive_[static_cast<std::size_t>(q)];
+    receive.clear();
     for (Index i = node_block_begins_[static_cast<std::size_t>(q)]; i < node_block_begins_[static_cast<std::size_t>(q) + 1]; ++i)
       if (near_block_[static_cast<std::size_t>(i)] || mine[static_cast<std::size_t>(i)]) receive.push_back(i);
     auto& send = halo_send_[static_cast<std::size_t>(q)];
+    send.clear();
     const auto& theirs = element_nodes_of_rank_[static_cast<std::size_t>(q)];
     for (Index i = node_first_; i < node_last_; ++i)
       if (near(q, i) || theirs[static_cast<std::size_t>(i)]) send.push_back(i);
