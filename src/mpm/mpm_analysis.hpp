@@ -204,6 +204,7 @@ class MpmAnalysis : public Analysis {
   /// ranks (each sums its block's chunks; the partials are all-gathered). Collective.
   template <int Q, class Terms>
   std::array<Real, Q> node_sums(const Terms& terms) const;
+  mutable std::vector<Real> sum_partials_;  // node_sums' chunk partials (kept: no allocation per step)
   Real power_sum_ = 0, hourglass_power_sum_ = 0, shortest_element_ = 0;  // element stage: sums and min over all elements
   /// Several ranks: every rank gets the node columns that their owners computed, of each (rows x nodes
   /// array, rows) listed.
@@ -245,7 +246,8 @@ class MpmAnalysis : public Analysis {
 template <int Q, class Terms>
 std::array<Real, Q> MpmAnalysis::node_sums(const Terms& terms) const {
   const Index n = x_.cols(), chunks = (n + kSumChunk - 1) / kSumChunk;
-  std::vector<Real> partial(static_cast<std::size_t>(Q * chunks), 0.0);
+  std::vector<Real>& partial = sum_partials_;
+  partial.assign(static_cast<std::size_t>(Q * chunks), 0.0);
   for (Index k = node_first_ / kSumChunk; k * kSumChunk < node_last_; ++k) {
     std::array<Real, Q> chunk{};
     for (Index i = k * kSumChunk; i < std::min(n, (k + 1) * kSumChunk); ++i) terms(i, chunk);

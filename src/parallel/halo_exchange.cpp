@@ -14,7 +14,10 @@ MPI_Datatype index_type() { return sizeof(Index) == 8 ? MPI_INT64_T : MPI_INT32_
 
 HaloExchange::HaloExchange(const std::vector<Index>& global, const std::vector<int>& owner, const Communicator& comm) {
   if (!comm.distributed()) return;
+  comm_ = &comm;
   const int ranks = comm.size();
+  send_.assign(static_cast<std::size_t>(ranks), {});
+  receive_.assign(static_cast<std::size_t>(ranks), {});
   // the halo nodes of each owner (global indices, ascending as `global` is)
   std::vector<std::vector<Index>> wanted(static_cast<std::size_t>(ranks));
   std::vector<std::vector<Index>> wanted_local(static_cast<std::size_t>(ranks));
@@ -35,61 +38,30 @@ HaloExchange::HaloExchange(const std::vector<Index>& global, const std::vector<i
                 receive_offsets.data(), index_type(), MPI_COMM_WORLD);
   for (int r = 0; r < ranks; ++r) {
     const auto ru = static_cast<std::size_t>(r);
-    if (send_counts[ru] == 0 && receive_counts[ru] == 0) continue;
-    Neighbour nb;
-    nb.rank = r;
-    nb.receive = wanted_local[ru];
+    receive_[ru] = wanted_local[ru];
     for (int k = 0; k < receive_counts[ru]; ++k) {
       const Index g = asked[static_cast<std::size_t>(receive_offsets[ru] + k)];
       const auto it = std::lower_bound(global.begin(), global.end(), g);
       if (it == global.end() || *it != g || owner[static_cast<std::size_t>(it - global.begin())] != comm.rank())
         throw std::logic_error("halo exchange: a rank asked for a node this rank does not own");
-      nb.send.push_back(static_cast<Index>(it - global.begin()));
+      send_[ru].push_back(static_cast<Index>(it - global.begin()));
     }
-    neighbours_.push_back(std::move(nb));
   }
 }
 
 void HaloExchange::exchange(Real* data, int rows) const {
-  if (neighbours_.empty()) return;
-  std::vector<std::vector<Real>> out(neighbours_.size()), in(neighbours_.size());
-  std::vector<MPI_Request> requests;
-  requests.reserve(2 * neighbours_.size());
-  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
-    const Neighbour& nb = neighbours_[k];
-    in[k].resize(nb.receive.size() * static_cast<std::size_t>(rows));
-    if (!in[k].empty()) {
-      requests.emplace_back();
-      MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_DOUBLE, nb.rank, 17, MPI_COMM_WORLD, &requests.back());
-    }
-  }
-  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
-    const Neighbour& nb = neighbours_[k];
-    out[k].resize(nb.send.size() * static_cast<std::size_t>(rows));
-    for (std::size_t s = 0; s < nb.send.size(); ++s)
-      std::copy_n(data + nb.send[s] * rows, rows, out[k].data() + s * static_cast<std::size_t>(rows));
-    if (!out[k].empty()) {
-      requests.emplace_back();
-      MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_DOUBLE, nb.rank, 17, MPI_COMM_WORLD, &requests.back());
-    }
-  }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
-  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
-    const Neighbour& nb = neighbours_[k];
-    for (std::size_t s = 0; s < nb.receive.size(); ++s)
-      std::copy_n(in[k].data() + s * static_cast<std::size_t>(rows), rows, data + nb.receive[s] * rows);
-  }
+  if (comm_) comm_->exchange_columns({{data, rows}}, send_, receive_);
 }
 
 Index HaloExchange::halo_nodes() const {
   Index n = 0;
-  for (const auto& nb : neighbours_) n += static_cast<Index>(nb.receive.size());
+  for (const auto& list : receive_) n += static_cast<Index>(list.size());
   return n;
 }
 
 Index HaloExchange::sent_nodes() const {
   Index n = 0;
-  for (const auto& nb : neighbours_) n += static_cast<Index>(nb.send.size());
+  for (const auto& list : send_) n += static_cast<Index>(list.size());
   return n;
 }
 

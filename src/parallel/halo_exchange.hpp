@@ -24,11 +24,9 @@ class HaloExchange {
   Index sent_nodes() const;
 
  private:
-  struct Neighbour {
-    int rank = 0;
-    std::vector<Index> send, receive;  // local indices, in ascending global order
-  };
-  std::vector<Neighbour> neighbours_;
+  const Communicator* comm_ = nullptr;
+  // per rank: the local columns sent to it / overwritten from it, in ascending global order
+  std::vector<std::vector<Index>> send_, receive_;
 };
 
 }  // namespace lamina::parallel

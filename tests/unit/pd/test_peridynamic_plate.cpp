@@ -332,7 +332,9 @@ TEST(PeridynamicPlate, RestrictedForcesEqualTheWholeForcesOnTheBlock) {
       f.plate->update(u, *state, false);
       const PointMatrix part = f.plate->internal_force(*state);
       for (Index k = 0; k < n; ++k) {
-        if (mine[static_cast<std::size_t>(k)]) EXPECT_EQ(part.col(k), whole.col(k)) << layers << " " << shape << " " << k;
+        if (mine[static_cast<std::size_t>(k)]) {
+          EXPECT_EQ(part.col(k), whole.col(k)) << layers << " " << shape << " " << k;
+        }
       }
       f.plate->restrict_to_nodes({});
       EXPECT_EQ(f.plate->internal_force(*f.plate->state_of(u)), whole) << layers;
