@@ -6,11 +6,16 @@ loaded node lines (x = c and x = W - c; total force 1, spread over the full widt
 forces are spread over the outer column's nodes). In-plane rigid motion is held at the centre and at
 one point of the x = W - c line. The overhang strips (width c) are part of the plate.
 
-    python3 calculix_as_built.py W c elements name   # writes name.inp; then: ccx name
+    python3 calculix_as_built.py W c elements name [nu] [pressure q]   # writes name.inp; then: ccx name
     # the case:            200 2.5 80 as_built      -> 10939.3 (P on the 200 mm width)
     # no overhang control: 195 0   78 no_overhang   -> 10361.4 (k = 4 gives 10451.0 on 195 mm)
     # refined case mesh:   200 2.5 160 as_built_fine -> 10939.2
 
+With `pressure q` the step is linear static under a uniform pressure q on the whole plate instead
+(validation/pd_plate_bending), and the centre node's displacement is printed:
+    # 210 5 84 bend_b20 0.3 pressure 0.001     -> w_centre 0.120775 (SS lines at 0 and 200 of the PD case)
+    # 205 2.5 82 bend_b40 0.3 pressure 0.001   -> w_centre 0.125215
+    # 200 0 80 bend_plain 0.3 pressure 0.001   -> w_centre 0.129636 (Timoshenko: 0.12851, S8R +0.9 %)
 The buckling factor is the total edge force P_cr on the width W. Square mesh of W / elements,
 which must put a node line (corner or mid-side) on x, y = c. Material and thickness as the case:
 E 69000, nu 0.33, t 2.
@@ -18,7 +23,7 @@ E 69000, nu 0.33, t 2.
 import sys
 
 
-def write(width, overhang, elements, name, young=69000.0, poisson=0.33, thickness=2.0):
+def write(width, overhang, elements, name, young=69000.0, poisson=0.33, thickness=2.0, pressure=None):
     size = width / elements
     lines = 2 * elements + 1                     # corner and mid-side node lines per direction
 
@@ -50,6 +55,12 @@ def write(width, overhang, elements, name, young=69000.0, poisson=0.33, thicknes
             "*SHELL SECTION,ELSET=EALL,MATERIAL=PLATE", f"{thickness}"]
     middle = (lines - 1) // 2
     out += ["*BOUNDARY", "SUPPORT,3,3", f"{node(middle, middle)},1,2", f"{node(far, middle)},2,2"]
+    if pressure is not None:
+        out += ["*NSET,NSET=CENTRE", str(node(middle, middle)), "*STEP", "*STATIC", "*DLOAD", f"EALL,P,{pressure}",
+                "*NODE PRINT,NSET=CENTRE", "U", "*END STEP"]
+        with open(name + ".inp", "w") as handle:
+            handle.write("\n".join(out) + "\n")
+        return
     out += ["*STEP", "*BUCKLE", "2", "*CLOAD"]
     force = {}                                   # consistent quadratic line-load weights, total 1
     for jj in range(elements):
@@ -63,6 +74,8 @@ def write(width, overhang, elements, name, young=69000.0, poisson=0.33, thicknes
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 5:
+    if len(sys.argv) not in (5, 6, 8):
         raise SystemExit(__doc__)
-    write(float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), sys.argv[4])
+    nu = float(sys.argv[5]) if len(sys.argv) > 5 else 0.33
+    q = float(sys.argv[7]) if len(sys.argv) == 8 and sys.argv[6] == "pressure" else None
+    write(float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), sys.argv[4], poisson=nu, pressure=q)
