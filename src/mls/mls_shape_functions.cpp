@@ -25,11 +25,13 @@ struct MlsWorkspace {
   std::vector<std::pair<Real, Index>> nearest;
   std::vector<Real> unsorted_offsets, unsorted_inverse_radii;
   IndexList indices;                // neighbours, ascending
-  std::vector<Real> offsets;        // 3 per neighbour: x - x_I
-  std::vector<Real> inverse_radii;  // 3 per neighbour: 1 / R_I,d
+  // structure of arrays, n per row (row d at d * n): x_d - x_I,d and 1 / R_I,d of the n neighbours
+  // (the unsorted buffers hold `capacity` per row)
+  std::vector<Real> offsets;
+  std::vector<Real> inverse_radii;
   std::vector<Real> weights;        // 10 arrays of n: w, w_x, w_y, w_z, w_xx, w_yy, w_zz, w_xy, w_yz, w_zx
   std::vector<Real> basis;          // n x m, column k = basis term k at the neighbours
-  std::vector<Real> scratch;        // n x max(6, m): p_I.r, p_I.r_,i, combined terms, weighted column / n x m
+  std::vector<Real> scratch;        // n x max(9, m): weight factors; p_I.r, p_I.r_,i, combined terms, weighted column / n x m
 };
 
 }  // namespace detail
@@ -52,99 +54,132 @@ void grow(Vector& vector, std::size_t size) {
   if (vector.size() < size) vector.resize(size);
 }
 
-/// Weights of all n neighbours and their derivatives with respect to the evaluation point x, written to
-/// weights[q * n + j] for q = 0 (w), 1..3 (w_,i), 4..9 (w_,ij in xx yy zz xy yz zx; only if Second).
-/// Box: w = prod_d w(s_d), s_d = |dx_d| / R_d. Sphere: s = |dx| / R, w_,i = (w'/s) dx_i / R^2,
-/// w_,ij = (w'/s) delta_ij / R^2 + (w'' - w'/s) (dx_i / r)(dx_j / r) / R^2.
-template <int Dim, bool Box, Weight Kind, bool Second>
-void compute_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
-                     Real* weights) {
-  for (std::size_t j = 0; j < n; ++j) {
-    const Real* offset = offsets + 3 * j;
-    const Real* inverse = inverse_radii + 3 * j;
-    if constexpr (Box) {
-      Real value[3], first[3], second[3];
-      for (int d = 0; d < Dim; ++d) {
-        const WeightValue w = function.template evaluate_inside<Kind>(std::abs(offset[d]) * inverse[d]);
-        value[d] = w.value;
-        first[d] = (offset[d] >= 0.0 ? w.first : -w.first) * inverse[d];
-        second[d] = w.second * inverse[d] * inverse[d];
-      }
-      if constexpr (Dim == 1) {
-        weights[j] = value[0];
-        weights[n + j] = first[0];
-        if constexpr (Second) weights[4 * n + j] = second[0];
-      } else if constexpr (Dim == 2) {
-        weights[j] = value[0] * value[1];
-        weights[n + j] = first[0] * value[1];
-        weights[2 * n + j] = value[0] * first[1];
-        if constexpr (Second) {
-          weights[4 * n + j] = second[0] * value[1];
-          weights[5 * n + j] = value[0] * second[1];
-          weights[7 * n + j] = first[0] * first[1];
-        }
-      } else {
-        weights[j] = value[0] * value[1] * value[2];
-        weights[n + j] = first[0] * value[1] * value[2];
-        weights[2 * n + j] = value[0] * first[1] * value[2];
-        weights[3 * n + j] = value[0] * value[1] * first[2];
-        if constexpr (Second) {
-          weights[4 * n + j] = second[0] * value[1] * value[2];
-          weights[5 * n + j] = value[0] * second[1] * value[2];
-          weights[6 * n + j] = value[0] * value[1] * second[2];
-          weights[7 * n + j] = first[0] * first[1] * value[2];
-          weights[8 * n + j] = value[0] * first[1] * first[2];
-          weights[9 * n + j] = first[0] * value[1] * first[2];
-        }
-      }
-    } else {
-      Real squared = 0.0;
-      for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
-      const Real distance = std::sqrt(squared);
-      const Real inverse_squared = inverse[0] * inverse[0];
-      const WeightValue w = function.template evaluate_inside<Kind>(distance * inverse[0]);
-      weights[j] = w.value;
-      const Real isotropic = w.first_over_s * inverse_squared;
-      for (int d = 0; d < Dim; ++d) weights[(1 + d) * n + j] = isotropic * offset[d];
+/// Box supports: per direction d the factors w(s_d), w'(s_d) sign(dx_d) / R_d, w''(s_d) / R_d^2 into
+/// `factors` (9 rows of n), then their products; both passes are plain loops over j that vectorise.
+template <int Dim, Weight Kind, bool Second>
+void compute_box_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
+                         Real* factors, Real* weights) {
+  for (int d = 0; d < Dim; ++d) {
+    const Real* offset = offsets + d * n;
+    const Real* inverse = inverse_radii + d * n;
+    Real* value = factors + (3 * d) * n;
+    Real* first = factors + (3 * d + 1) * n;
+    Real* second = factors + (3 * d + 2) * n;
+    for (std::size_t j = 0; j < n; ++j) {
+      const WeightValue w = function.template evaluate_inside<Kind>(std::abs(offset[j]) * inverse[j]);
+      value[j] = w.value;
+      first[j] = std::copysign(w.first, -offset[j]) * inverse[j];  // sign(dx_d) w' / R_d, w' <= 0
+      if constexpr (Second) second[j] = w.second * inverse[j] * inverse[j];
+    }
+  }
+  auto row = [&](int d, int q) { return factors + (3 * d + q) * n; };  // q: 0 value, 1 first, 2 second
+  if constexpr (Dim == 1) {
+    for (std::size_t j = 0; j < n; ++j) {
+      weights[j] = row(0, 0)[j];
+      weights[n + j] = row(0, 1)[j];
+      if constexpr (Second) weights[4 * n + j] = row(0, 2)[j];
+    }
+  } else if constexpr (Dim == 2) {
+    const Real *v0 = row(0, 0), *v1 = row(1, 0), *f0 = row(0, 1), *f1 = row(1, 1), *s0 = row(0, 2), *s1 = row(1, 2);
+    for (std::size_t j = 0; j < n; ++j) {
+      weights[j] = v0[j] * v1[j];
+      weights[n + j] = f0[j] * v1[j];
+      weights[2 * n + j] = v0[j] * f1[j];
       if constexpr (Second) {
-        Real unit[3] = {0.0, 0.0, 0.0};
-        if (distance > 0.0)
-          for (int d = 0; d < Dim; ++d) unit[d] = offset[d] / distance;
-        const Real radial = (w.second - w.first_over_s) * inverse_squared;
-        constexpr int first_index[6] = {0, 1, 2, 0, 1, 2};
-        constexpr int second_index[6] = {0, 1, 2, 1, 2, 0};
-        for (int k = 0; k < 6; ++k) {
-          const int a = first_index[k], b = second_index[k];
-          if (a >= Dim || b >= Dim) continue;
-          weights[(4 + k) * n + j] = radial * unit[a] * unit[b] + (a == b ? isotropic : 0.0);
-        }
+        weights[4 * n + j] = s0[j] * v1[j];
+        weights[5 * n + j] = v0[j] * s1[j];
+        weights[7 * n + j] = f0[j] * f1[j];
+      }
+    }
+  } else {
+    const Real *v0 = row(0, 0), *v1 = row(1, 0), *v2 = row(2, 0);
+    const Real *f0 = row(0, 1), *f1 = row(1, 1), *f2 = row(2, 1);
+    const Real *s0 = row(0, 2), *s1 = row(1, 2), *s2 = row(2, 2);
+    for (std::size_t j = 0; j < n; ++j) {
+      weights[j] = v0[j] * v1[j] * v2[j];
+      weights[n + j] = f0[j] * v1[j] * v2[j];
+      weights[2 * n + j] = v0[j] * f1[j] * v2[j];
+      weights[3 * n + j] = v0[j] * v1[j] * f2[j];
+      if constexpr (Second) {
+        weights[4 * n + j] = s0[j] * v1[j] * v2[j];
+        weights[5 * n + j] = v0[j] * s1[j] * v2[j];
+        weights[6 * n + j] = v0[j] * v1[j] * s2[j];
+        weights[7 * n + j] = f0[j] * f1[j] * v2[j];
+        weights[8 * n + j] = v0[j] * f1[j] * f2[j];
+        weights[9 * n + j] = f0[j] * v1[j] * f2[j];
       }
     }
   }
 }
 
+/// Spherical supports (see compute_weights).
+template <int Dim, Weight Kind, bool Second>
+void compute_sphere_weights(const WeightFunction& function, std::size_t n, const Real* offsets,
+                            const Real* inverse_radii, Real* weights) {
+  for (std::size_t j = 0; j < n; ++j) {
+    Real offset[3], inverse[3];
+    for (int d = 0; d < Dim; ++d) {
+      offset[d] = offsets[d * n + j];
+      inverse[d] = inverse_radii[d * n + j];
+    }
+      Real squared = 0.0;
+    for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
+    const Real distance = std::sqrt(squared);
+    const Real inverse_squared = inverse[0] * inverse[0];
+    const WeightValue w = function.template evaluate_inside<Kind>(distance * inverse[0]);
+    weights[j] = w.value;
+    const Real isotropic = w.first_over_s * inverse_squared;
+    for (int d = 0; d < Dim; ++d) weights[(1 + d) * n + j] = isotropic * offset[d];
+    if constexpr (Second) {
+      Real unit[3] = {0.0, 0.0, 0.0};
+      if (distance > 0.0)
+        for (int d = 0; d < Dim; ++d) unit[d] = offset[d] / distance;
+      const Real radial = (w.second - w.first_over_s) * inverse_squared;
+      constexpr int first_index[6] = {0, 1, 2, 0, 1, 2};
+      constexpr int second_index[6] = {0, 1, 2, 1, 2, 0};
+      for (int k = 0; k < 6; ++k) {
+        const int a = first_index[k], b = second_index[k];
+        if (a >= Dim || b >= Dim) continue;
+        weights[(4 + k) * n + j] = radial * unit[a] * unit[b] + (a == b ? isotropic : 0.0);
+      }
+    }
+  }
+}
+
+/// Weights of all n neighbours and their derivatives with respect to the evaluation point x, written to
+/// weights[q * n + j] for q = 0 (w), 1..3 (w_,i), 4..9 (w_,ij in xx yy zz xy yz zx; only if Second).
+/// Box: w = prod_d w(s_d), s_d = |dx_d| / R_d. Sphere: s = |dx| / R, w_,i = (w'/s) dx_i / R^2,
+/// w_,ij = (w'/s) delta_ij / R^2 + (w'' - w'/s) (dx_i / r)(dx_j / r) / R^2.
+/// offsets, inverse_radii: 3 rows of n (structure of arrays); factors: 9 n scratch values.
+template <int Dim, bool Box, Weight Kind, bool Second>
+void compute_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
+                     Real* factors, Real* weights) {
+  if constexpr (Box) compute_box_weights<Dim, Kind, Second>(function, n, offsets, inverse_radii, factors, weights);
+  else compute_sphere_weights<Dim, Kind, Second>(function, n, offsets, inverse_radii, weights);
+}
+
 template <int Dim, bool Box, bool Second>
 void compute_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
-                     Real* weights) {
+                     Real* factors, Real* weights) {
   switch (function.kind()) {
     case Weight::gauss:
-      return compute_weights<Dim, Box, Weight::gauss, Second>(function, n, offsets, inverse_radii, weights);
+      return compute_weights<Dim, Box, Weight::gauss, Second>(function, n, offsets, inverse_radii, factors, weights);
     case Weight::cubic_spline:
-      return compute_weights<Dim, Box, Weight::cubic_spline, Second>(function, n, offsets, inverse_radii, weights);
+      return compute_weights<Dim, Box, Weight::cubic_spline, Second>(function, n, offsets, inverse_radii, factors, weights);
     case Weight::quartic_spline:
-      return compute_weights<Dim, Box, Weight::quartic_spline, Second>(function, n, offsets, inverse_radii, weights);
+      return compute_weights<Dim, Box, Weight::quartic_spline, Second>(function, n, offsets, inverse_radii, factors, weights);
   }
 }
 
 template <int Dim>
 void compute_weights(const WeightFunction& function, bool box, bool second, std::size_t n, const Real* offsets,
-                     const Real* inverse_radii, Real* weights) {
+                     const Real* inverse_radii, Real* factors, Real* weights) {
   if (box) {
-    if (second) compute_weights<Dim, true, true>(function, n, offsets, inverse_radii, weights);
-    else compute_weights<Dim, true, false>(function, n, offsets, inverse_radii, weights);
+    if (second) compute_weights<Dim, true, true>(function, n, offsets, inverse_radii, factors, weights);
+    else compute_weights<Dim, true, false>(function, n, offsets, inverse_radii, factors, weights);
   } else {
-    if (second) compute_weights<Dim, false, true>(function, n, offsets, inverse_radii, weights);
-    else compute_weights<Dim, false, false>(function, n, offsets, inverse_radii, weights);
+    if (second) compute_weights<Dim, false, true>(function, n, offsets, inverse_radii, factors, weights);
+    else compute_weights<Dim, false, false>(function, n, offsets, inverse_radii, factors, weights);
   }
 }
 
@@ -327,13 +362,15 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   const Real inverse_factor = 1.0 / radius_factor;
   std::size_t count = 0;
   std::pair<Index, Index>* candidates = nullptr;
+  // candidate slot c, direction d at [d * stride + c] (structure of arrays)
+  std::size_t stride = 0;
   Real* offsets = nullptr;
   Real* inverse_radii = nullptr;
   auto reserve = [&](Index capacity) {
-    const auto size = static_cast<std::size_t>(capacity);
-    grow(workspace.candidates, size);
-    grow(workspace.unsorted_offsets, 3 * size);
-    grow(workspace.unsorted_inverse_radii, 3 * size);
+    stride = static_cast<std::size_t>(capacity);
+    grow(workspace.candidates, stride);
+    grow(workspace.unsorted_offsets, 3 * stride);
+    grow(workspace.unsorted_inverse_radii, 3 * stride);
     candidates = workspace.candidates.data();
     offsets = workspace.unsorted_offsets.data();
     inverse_radii = workspace.unsorted_inverse_radii.data();
@@ -341,8 +378,8 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   auto accept = [&](Index index, const Real* offset, const Real* inverse) {
     candidates[count] = {index, static_cast<Index>(count)};
     for (int d = 0; d < 3; ++d) {
-      offsets[3 * count + d] = offset[d];
-      inverse_radii[3 * count + d] = inverse[d];
+      offsets[d * stride + count] = offset[d];
+      inverse_radii[d * stride + count] = inverse[d];
     }
     ++count;
   };
@@ -364,8 +401,8 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
         // Branch-free: write the candidate, keep it only if inside (about half are rejected).
         candidates[count] = {order[k], static_cast<Index>(count)};
         for (int d = 0; d < 3; ++d) {
-          offsets[3 * count + d] = offset[d];
-          inverse_radii[3 * count + d] = inverse[d];
+          offsets[d * stride + count] = offset[d];
+          inverse_radii[d * stride + count] = inverse[d];
         }
         count += inside ? 1 : 0;
       });
@@ -382,10 +419,17 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
       });
     }
     // Basis scaling rho_d: the largest support radius among the neighbours.
-    Vec3 smallest = Vec3::Constant(std::numeric_limits<Real>::infinity());
-    for (std::size_t j = 0; j < count; ++j)
-      for (int d = 0; d < 3; ++d) smallest[d] = std::min(smallest[d], inverse_radii[3 * j + d]);
-    for (int d = 0; d < 3; ++d) rho[d] = 1.0 / smallest[d];
+    // (four independent minima per direction: one serial chain of min would cost its latency per neighbour)
+    for (int d = 0; d < 3; ++d) {
+      Real smallest[4];
+      std::fill_n(smallest, 4, std::numeric_limits<Real>::infinity());
+      const Real* inverse = inverse_radii + d * stride;
+      std::size_t j = 0;
+      for (; j + 4 <= count; j += 4)
+        for (int l = 0; l < 4; ++l) smallest[l] = std::min(smallest[l], inverse[j + static_cast<std::size_t>(l)]);
+      for (; j < count; ++j) smallest[0] = std::min(smallest[0], inverse[j]);
+      rho[d] = 1.0 / std::min(std::min(smallest[0], smallest[1]), std::min(smallest[2], smallest[3]));
+    }
   } else {
     cells_.nearest(x, nearest_count, workspace.nearest);
     const Real point_radius = workspace.nearest.empty()
@@ -426,21 +470,24 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
 
   // Neighbours in ascending index order (the cells deliver structured grids already sorted).
   const auto n = count;
+  // rows of n (structure of arrays)
   workspace.indices.resize(n);
   grow(workspace.offsets, 3 * n);
   grow(workspace.inverse_radii, 3 * n);
   if (std::is_sorted(candidates, candidates + n)) {
     for (std::size_t j = 0; j < n; ++j) workspace.indices[j] = candidates[j].first;
-    std::swap(workspace.offsets, workspace.unsorted_offsets);
-    std::swap(workspace.inverse_radii, workspace.unsorted_inverse_radii);
+    for (int d = 0; d < 3; ++d) {
+      std::copy_n(offsets + d * stride, n, workspace.offsets.data() + d * n);
+      std::copy_n(inverse_radii + d * stride, n, workspace.inverse_radii.data() + d * n);
+    }
   } else {
     std::sort(candidates, candidates + n);
     for (std::size_t j = 0; j < n; ++j) {
       const auto [index, slot] = candidates[j];
       workspace.indices[j] = index;
       for (int d = 0; d < 3; ++d) {
-        workspace.offsets[3 * j + d] = offsets[3 * slot + d];
-        workspace.inverse_radii[3 * j + d] = inverse_radii[3 * slot + d];
+        workspace.offsets[d * n + j] = offsets[d * stride + static_cast<std::size_t>(slot)];
+        workspace.inverse_radii[d * n + j] = inverse_radii[d * stride + static_cast<std::size_t>(slot)];
       }
     }
   }
@@ -498,21 +545,23 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       const auto count = static_cast<std::size_t>(n);
       grow(workspace.weights, 10 * count);
       grow(workspace.basis, M * count);
-      grow(workspace.scratch, std::max(6, M) * count);
+      grow(workspace.scratch, std::max(9, M) * count);
       compute_weights<Dim>(function, box, derivative_order >= 2, count, workspace.offsets.data(),
-                           workspace.inverse_radii.data(), workspace.weights.data());
+                           workspace.inverse_radii.data(), workspace.scratch.data(), workspace.weights.data());
       BasisMap basis(workspace.basis.data(), n, M);
       Real inverse_rho[3];
       for (int d = 0; d < Dim; ++d) inverse_rho[d] = -1.0 / rho[d];
       const Real* offsets = workspace.offsets.data();
+      Real* columns = workspace.basis.data();  // column k at k * n: vectorised over the neighbours j
       for (Index j = 0; j < n; ++j) {
         Real z[3], p[P];
-        for (int d = 0; d < Dim; ++d) z[d] = offsets[3 * j + d] * inverse_rho[d];
+        for (int d = 0; d < Dim; ++d) z[d] = offsets[d * n + j] * inverse_rho[d];
         Polynomial::values(z, p);
-        for (int k = 0; k < P; ++k) basis(j, k) = p[k];
-        if constexpr (Enriched)
-          basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
+        for (int k = 0; k < P; ++k) columns[k * n + j] = p[k];
       }
+      if constexpr (Enriched)
+        for (Index j = 0; j < n; ++j)
+          basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
       if constexpr (Enriched) weighted_gram<M>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
       else moment_matrix<Dim, B>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
       regular = factor.factor(a, options_.max_condition);
