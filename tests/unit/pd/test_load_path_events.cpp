@@ -69,3 +69,36 @@ TEST(LoadPathEvents, SnapUnderLoadControlIsOneEvent) {
   EXPECT_LE(events[0].load, 21.0);
   EXPECT_NEAR(events[0].stiffness_ratio, 0.6, 1e-9);
 }
+
+TEST(LoadPathEvents, ImperfectPlateKneeLiesBelowTheBifurcationLoad) {
+  // One-term Marguerre plate with an imperfection in the buckling mode: deflection xi added to the initial
+  // xi0, stretching energy ~ ((xi + xi0)^2 - xi0^2)^2, so (1 - P/Pcr) xi + c xi (xi + xi0)(xi + 2 xi0) =
+  // (P/Pcr) xi0, and end shortening Delta = P/K0 + beta ((xi + xi0)^2 - xi0^2). The perfect plate's branches,
+  // Delta = P/K0 and P = Pcr (1 + c xi^2), cross at Pcr; beta = 1.5 c Pcr / K0 makes the post-buckling
+  // stiffness 0.4 K0. Imperfection xi0 = 0.1 (t / 10 with xi in thicknesses, c = 1) and 45 equal load steps
+  // to 4.5 Pcr, as in seed 002's plate (validation/pd_plate_post_buckling). The imperfect path approaches
+  // the perfect asymptote only as xi0 / xi, so any two-tangent reading of its knee lies below Pcr: the
+  // initial tangent crossed with the tangent at 1.1 / 2.2 / 4.4 Pcr gives 0.76 / 0.89 / 0.94 Pcr. The
+  // detector's local reading (the tangents where the drop rate is half its peak) gives 0.78 Pcr: an exact
+  // plate with this imperfection shows its first stiffness change about 22 % below its bifurcation load.
+  const Real pcr = 10.0, k0 = 100.0, c = 1.0, xi0 = 0.1, beta = 1.5 * c * pcr / k0;
+  std::vector<Real> load{0}, displacement{0};
+  for (int i = 1; i <= 45; ++i) {
+    const Real p = i;
+    // the left side minus the right rises monotonically with xi >= 0 from -P xi0 / Pcr: bisection
+    Real low = 0.0, high = 100.0;
+    for (int it = 0; it < 200; ++it) {
+      const Real xi = 0.5 * (low + high);
+      ((1.0 - p / pcr) * xi + c * xi * (xi + xi0) * (xi + 2.0 * xi0) - p / pcr * xi0 < 0.0 ? low : high) = xi;
+    }
+    const Real xi = 0.5 * (low + high);
+    load.push_back(p);
+    displacement.push_back(p / k0 + beta * xi * (xi + 2.0 * xi0));
+  }
+  const auto events = detect_stiffness_changes(load, displacement);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_NEAR(events[0].load / pcr, 0.78, 0.02);
+  EXPECT_GT(events[0].peak_load, 0.6 * pcr);  // the steepest drop, also inside the knee
+  EXPECT_LT(events[0].peak_load, pcr);
+  EXPECT_NEAR(events[0].stiffness_ratio, 0.45, 0.05);  // settled on the way to the asymptote's 0.4
+}
