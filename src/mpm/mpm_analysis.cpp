@@ -218,7 +218,8 @@ void MpmAnalysis::locate_grid() {
   const Real* xs = x_.data();
   constexpr Real kInfinity = std::numeric_limits<Real>::infinity();
   std::vector<std::array<Real, 6>> box(static_cast<std::size_t>(ranks));  // low x, y, z, high x, y, z
-  Real sum = 0;
+  const Real margin = 2.01 * grid_.cell();
+  Real sum = 0;  // of every coordinate: non-finite if one is (then check_range names it)
   for (int q = 0; q < ranks; ++q) {
     std::array<Real, 6> b{kInfinity, kInfinity, kInfinity, -kInfinity, -kInfinity, -kInfinity};
     for (Index i = node_block_begins_[static_cast<std::size_t>(q)]; i < node_block_begins_[static_cast<std::size_t>(q) + 1]; ++i)
@@ -228,7 +229,6 @@ void MpmAnalysis::locate_grid() {
         b[static_cast<std::size_t>(d) + 3] = std::max(b[static_cast<std::size_t>(d) + 3], v);
         sum += v;
       }
-    const Real margin = 2.01 * grid_.cell();
     for (std::size_t d = 0; d < 3; ++d) b[d] -= margin, b[d + 3] += margin;
     box[static_cast<std::size_t>(q)] = b;
   }
