@@ -99,11 +99,12 @@ VolumeQuadrature volume_quadrature(const BackgroundCells& cells, const std::arra
 namespace {
 
 /// Appends the Gauss points of one boundary face (axis d, side) of a cell, optionally split into
-/// `split` x `split` sub-faces.
+/// `split` x `split` sub-faces; with `keep`, only the points where keep(x, face) holds (tested before the
+/// point's Jacobian is computed).
 void append_face(const BackgroundCells& cells, Index c, int d, int side, const std::array<int, 3>& gauss, int split,
                  const std::array<std::vector<Real>, 3>& xi, const std::array<std::vector<Real>, 3>& wi,
                  SurfaceQuadrature& q, std::vector<Vec3>& points, std::vector<Vec3>& normals, std::vector<Real>& weights,
-                 std::vector<Real>& sizes) {
+                 std::vector<Real>& sizes, const std::function<bool(const Vec3&, int)>* keep = nullptr) {
   const int a = (d + 1) % 3, b = (d + 2) % 3;
   Vec3 lo, hi;
   cells.bounds(c, lo, hi);
@@ -119,6 +120,8 @@ void append_face(const BackgroundCells& cells, Index c, int d, int side, const s
           u[d] = side == 0 ? lo[d] : hi[d];
           u[a] = ma + ha * xi[a][ka];
           u[b] = mb + hb * xi[b][kb];
+          const Vec3 x = cells.map.position(u);
+          if (keep && !(*keep)(x, 2 * d + side)) continue;
           const Mat3 J = map_jacobian(cells.map, u, step);
           const Vec3 cross = J.col(a).cross(J.col(b));
           const Real area = cross.norm();
@@ -127,7 +130,7 @@ void append_face(const BackgroundCells& cells, Index c, int d, int side, const s
           Vec3 normal = cross / area;
           const Real orientation = normal.dot(J.col(d));
           if ((side == 1 && orientation < 0) || (side == 0 && orientation > 0)) normal = -normal;
-          points.push_back(cells.map.position(u));
+          points.push_back(x);
           normals.push_back(normal);
           weights.push_back(wi[a][ka] * wi[b][kb] * ha * hb * area);
           sizes.push_back(J.col(d).norm() * (hi[d] - lo[d]));
@@ -200,20 +203,8 @@ SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const Surf
     const Index c = base.cell[static_cast<std::size_t>(s)];
     // candidates for a partial selection: faces with some hits, or whose neighbours on the
     // refined grid might hit (test the refined points of every face that is not fully selected)
-    SurfaceQuadrature fine;
-    std::vector<Vec3> fp, fn;
-    std::vector<Real> fw, fs;
     const bool all = hits == e - s;
-    append_face(cells, c, face / 2, face % 2, gauss, all ? 1 : split, xi, wi, fine, fp, fn, fw, fs);
-    for (std::size_t i = 0; i < fp.size(); ++i) {
-      if (!selected(fp[i], face)) continue;
-      points.push_back(fp[i]);
-      normals.push_back(fn[i]);
-      weights.push_back(fw[i]);
-      sizes.push_back(fs[i]);
-      q.face.push_back(face);
-      q.cell.push_back(c);
-    }
+    append_face(cells, c, face / 2, face % 2, gauss, all ? 1 : split, xi, wi, q, points, normals, weights, sizes, &selected);
     s = e;
   }
   return finish(std::move(q), points, normals, weights, sizes);
