@@ -146,6 +146,12 @@ Eigen::VectorXd solve_symmetric(const SparseMatrix& upper, const Eigen::VectorXd
     auto start = std::chrono::steady_clock::now();
     CholmodLlt llt;
     llt.cholmod().print = 0;  // lamina reports a failed factorisation itself, in one line
+    // Fill-reducing ordering: both AMD and METIS, the one with the sparser factor kept. CHOLMOD's own
+    // default tries METIS only when AMD's fill is large, and on the EFG systems (hundreds of neighbours
+    // per node) it kept AMD where METIS factors 3.5 x faster (R1a 21 x 21 x 5: 2.4 s -> 0.69 s).
+    llt.cholmod().nmethods = 2;
+    llt.cholmod().method[0].ordering = CHOLMOD_AMD;
+    llt.cholmod().method[1].ordering = CHOLMOD_METIS;
     const int saved_threads = omp_get_max_threads();
     if (options.factor_threads > 0) omp_set_num_threads(std::min(options.factor_threads, saved_threads));
     llt.compute(upper);
