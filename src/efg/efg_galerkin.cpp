@@ -214,7 +214,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       if (options.essential == EssentialMethod::nitsche && p.surface) {
         const auto& mat = materials_[static_cast<std::size_t>(p.material)];
         const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
-        nitsche_terms(sv, p, mat, beta, Kc, fc);
+        nitsche_terms(sv, p, mat, beta, Kc, fc, pattern.symmetric());
       } else {
         penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
       }

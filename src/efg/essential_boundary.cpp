@@ -32,27 +32,23 @@ void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p,
 }
 
 void nitsche_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
-                   Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f) {
+                   Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f, bool upper_only) {
   const Index m = static_cast<Index>(sv.neighbours.size());
   const auto T = traction_operator(sv, material, p.normal);
   K.setZero(3 * m, 3 * m);
   f.setZero(3 * m);
   const Real w = p.weight;
+  Eigen::VectorXd n(3 * m), v(3 * m);
   for (int a = 0; a < 3; ++a) {
     if (!p.constrained[static_cast<std::size_t>(a)]) continue;
-    // N_a(3k + a) = phi_k: rows/columns of component a
-    for (Index k = 0; k < m; ++k) {
-      const Real phik = sv.phi[k];
-      for (Index col = 0; col < 3 * m; ++col) {
-        const Real v = -w * phik * T(a, col);
-        K(3 * k + a, col) += v;  // - N^T S T
-        K(col, 3 * k + a) += v;  // - T^T S N
-      }
-      for (Index l = 0; l < m; ++l) K(3 * k + a, 3 * l + a) += w * beta * phik * sv.phi[l];
-      f[3 * k + a] += w * beta * phik * p.value[a];
-    }
-    for (Index col = 0; col < 3 * m; ++col) f[col] -= w * T(a, col) * p.value[a];
+    // N_a(3k + a) = phi_k: the terms of component a are n v^T + v n^T with v = -w T_a^T + (w beta / 2) n
+    n.setZero();
+    for (Index k = 0; k < m; ++k) n[3 * k + a] = sv.phi[k];
+    v = -w * T.row(a).transpose() + (0.5 * w * beta) * n;
+    K.selfadjointView<Eigen::Upper>().rankUpdate(n, v);
+    f += (w * beta * p.value[a]) * n - (w * p.value[a]) * T.row(a).transpose();
   }
+  if (!upper_only) K.triangularView<Eigen::StrictlyLower>() = K.transpose();
 }
 
 }  // namespace lamina::efg

@@ -61,8 +61,9 @@ void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p,
                    Eigen::VectorXd& f);
 
 /// Nitsche terms of one surface point: K += w (-N^T S T - T^T S N + beta N^T S N),
-/// f += w (-T^T S u-bar + beta N^T S u-bar).
+/// f += w (-T^T S u-bar + beta N^T S u-bar). upper_only: K's upper triangle only (what a symmetric
+/// BlockPattern::scatter reads).
 void nitsche_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
-                   Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f);
+                   Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f, bool upper_only = false);
 
 }  // namespace lamina::efg
