@@ -2,8 +2,8 @@
 // Direct solution of the sparse linear systems of the static methods.
 //
 //   solve_symmetric: K x = b with K symmetric, given by its upper triangle (column-major).
-//     1. CHOLMOD supernodal Cholesky (Eigen::CholmodSupernodalLLT, AMD/METIS ordering chosen by
-//        CHOLMOD). Accepted when the factorisation succeeds and the reciprocal condition estimate
+//     1. CHOLMOD supernodal Cholesky (Eigen::CholmodSupernodalLLT; CHOLMOD orders with both AMD and
+//        METIS and keeps the sparser factor). Accepted when the factorisation succeeds and the reciprocal condition estimate
 //        of the factor (cholmod_rcond: (min diag L / max diag L)^2) is above `min_rcond`.
 //     2. Otherwise (not positive definite): Eigen::SimplicialLDLT as the fallback (indefinite
 //        symmetric systems without pivoting).
