@@ -1,6 +1,6 @@
 #pragma once
-// The PETSc plumbing shared by solve/petsc_linear_solver and solve/slepc_eigen_solver (internal to
-// solve): PETSc started once per process, error codes turned into AnalysisError, and a distributed AIJ
+// The PETSc plumbing shared by the linear and eigen solvers of the PETSc module (src/petsc_solvers):
+// PETSc started once per process, error codes turned into AnalysisError, and a distributed AIJ
 // matrix built from an Eigen matrix that every rank holds (its share, or the whole replicated system).
 #include <petscmat.h>
 
@@ -10,8 +10,8 @@
 
 namespace lamina::solve::petsc {
 
-/// PETSc, started once per process (on MPI_COMM_WORLD when lamina runs on several ranks) and
-/// finalized before MPI (parallel::Environment) or at exit.
+/// PETSc, started once per process (on MPI_COMM_WORLD when lamina runs on several ranks); finalize()
+/// (petsc_solvers.hpp) ends it, called by the loader before MPI (parallel::Environment) or at exit.
 void ensure_started();
 /// Throws AnalysisError naming `what` when code is not 0.
 void check(PetscErrorCode code, const char* what);

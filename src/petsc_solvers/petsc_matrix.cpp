@@ -1,13 +1,17 @@
-#include "solve/petsc_matrix.hpp"
+#include "petsc_solvers/petsc_matrix.hpp"
 
 #include <fmt/format.h>
 
-#include <cstdlib>
 #include <vector>
 
 #include "core/error.hpp"
+#include "petsc_solvers/petsc_solvers.hpp"
 
 namespace lamina::solve::petsc {
+
+namespace {
+bool initialised_here = false;  // PetscInitialize called by ensure_started (finalize ends only that)
+}  // namespace
 
 void ensure_started() {  // PETSc starts a one-process MPI itself when lamina made none
   static bool started = false;
@@ -17,16 +21,18 @@ void ensure_started() {  // PETSc starts a one-process MPI itself when lamina ma
   if (!initialised) {
     PetscOptionsSetValue(nullptr, "-options_left", "false");
     if (PetscInitializeNoArguments() != 0) throw AnalysisError("PETSc could not be initialised");
-    // before lamina's MPI_Finalize (parallel::Environment), or at exit where there is none (Python)
-    static const auto finalize = [] {
-      PetscBool finalized = PETSC_FALSE;
-      PetscFinalized(&finalized);
-      if (!finalized) PetscFinalize();
-    };
-    parallel::Environment::before_finalize(finalize);
-    std::atexit([] { finalize(); });
+    initialised_here = true;
   }
   started = true;
+}
+
+// Not parallel::Environment::before_finalize here: the module has its own copy of that static state,
+// never run; the loader (solve/petsc_module.cpp) registers finalize with the program's Environment.
+void finalize() {
+  if (!initialised_here) return;
+  PetscBool finalized = PETSC_FALSE;
+  PetscFinalized(&finalized);
+  if (!finalized) PetscFinalize();
 }
 
 void check(PetscErrorCode code, const char* what) {

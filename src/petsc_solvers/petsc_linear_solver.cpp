@@ -1,4 +1,4 @@
-#include "solve/petsc_linear_solver.hpp"
+#include "petsc_solvers/petsc_solvers.hpp"
 
 #include <fmt/format.h>
 #include <petscksp.h>
@@ -7,11 +7,9 @@
 
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
-#include "solve/petsc_matrix.hpp"
+#include "petsc_solvers/petsc_matrix.hpp"
 
-namespace lamina::solve {
-
-using petsc::check;
+namespace lamina::solve::petsc {
 
 namespace {
 
@@ -21,15 +19,15 @@ Eigen::VectorXd solve_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b,
                             const parallel::Communicator& comm, SolverReport& report, SystemShares shares, Storage storage,
                             bool positive_definite, int dofs_per_node) {
   const bool mirror = storage == Storage::symmetric_upper;  // the lower triangle from the upper one
-  petsc::ensure_started();
+  ensure_started();
   const auto start = Clock::now();
   const PetscInt n = static_cast<PetscInt>(upper.rows());
   const int ranks = comm.size();
-  const petsc::RowBlock block = petsc::row_block(n, dofs_per_node, comm);
+  const RowBlock block = row_block(n, dofs_per_node, comm);
   const PetscInt first = block.first, last = block.last;
   // a replicated system: this rank passes the entries of its rows only
   auto passes = [&](Index row) { return shares == SystemShares::summed || (row >= first && row < last); };
-  Mat a = petsc::assemble_matrix(upper, mirror, shares, block);
+  Mat a = assemble_matrix(upper, mirror, shares, block);
   check(MatSetOption(a, MAT_SPD, mirror && positive_definite ? PETSC_TRUE : PETSC_FALSE), "MatSetOption");
 
   Vec rhs, x;
@@ -128,16 +126,15 @@ Eigen::VectorXd solve_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b,
 
 }  // namespace
 
-Eigen::VectorXd solve_symmetric_petsc(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
-                                      const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
-                                      bool positive_definite, int dofs_per_node) {
+Eigen::VectorXd solve_symmetric(const SparseMatrix& upper, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                                const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
+                                bool positive_definite, int dofs_per_node) {
   return solve_petsc(upper, b, choice, comm, report, shares, Storage::symmetric_upper, positive_definite, dofs_per_node);
 }
 
-Eigen::VectorXd solve_general_petsc(const SparseMatrix& a, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
-                                    const parallel::Communicator& comm, SolverReport& report, SystemShares shares,
-                                    int dofs_per_node) {
+Eigen::VectorXd solve_general(const SparseMatrix& a, const Eigen::VectorXd& b, const LinearSolverChoice& choice,
+                              const parallel::Communicator& comm, SolverReport& report, SystemShares shares, int dofs_per_node) {
   return solve_petsc(a, b, choice, comm, report, shares, Storage::full, false, dofs_per_node);
 }
 
-}  // namespace lamina::solve
+}  // namespace lamina::solve::petsc

@@ -1,4 +1,4 @@
-#include "solve/slepc_eigen_solver.hpp"
+#include "petsc_solvers/petsc_solvers.hpp"
 
 #include <fmt/format.h>
 #include <slepceps.h>
@@ -7,17 +7,17 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "solve/petsc_matrix.hpp"
+#include "petsc_solvers/petsc_matrix.hpp"
 
-namespace lamina::solve {
+namespace lamina::solve::petsc {
 
 namespace {
 
-/// SLEPc on top of the PETSc that petsc::ensure_started() started (finalized with it, at exit).
+/// SLEPc on top of the PETSc that ensure_started() started (finalized with it).
 void ensure_slepc() {
   static bool started = false;
   if (started) return;
-  petsc::ensure_started();
+  ensure_started();
   PetscBool initialised = PETSC_FALSE;
   SlepcInitialized(&initialised);
   if (!initialised && SlepcInitializeNoArguments() != 0) throw AnalysisError("SLEPc could not be initialised");
@@ -29,12 +29,11 @@ void ensure_slepc() {
 EigenPairs largest_generalized_eigenpairs(const SparseMatrix& a_upper, const SparseMatrix& b_upper, int count,
                                           const parallel::Communicator& comm, Real tolerance, int max_iterations,
                                           int dofs_per_node) {
-  using petsc::check;
   ensure_slepc();
   const PetscInt n = static_cast<PetscInt>(b_upper.rows());
-  const petsc::RowBlock rows = petsc::row_block(n, dofs_per_node, comm);
-  Mat a = petsc::assemble_matrix(a_upper, true, SystemShares::replicated, rows);
-  Mat b = petsc::assemble_matrix(b_upper, true, SystemShares::replicated, rows);
+  const RowBlock rows = row_block(n, dofs_per_node, comm);
+  Mat a = assemble_matrix(a_upper, true, SystemShares::replicated, rows);
+  Mat b = assemble_matrix(b_upper, true, SystemShares::replicated, rows);
   check(MatSetOption(b, MAT_SPD, PETSC_TRUE), "MatSetOption");
   EPS eps;
   check(EPSCreate(PETSC_COMM_WORLD, &eps), "EPSCreate");
@@ -95,4 +94,4 @@ EigenPairs largest_generalized_eigenpairs(const SparseMatrix& a_upper, const Spa
   return out;  // the largest first: SLEPc's order for EPS_LARGEST_REAL
 }
 
-}  // namespace lamina::solve
+}  // namespace lamina::solve::petsc
