@@ -1,11 +1,12 @@
 #include "geometry/gmsh_import.hpp"
 
-#include <dlfcn.h>
-
 #include <filesystem>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 
 #include "core/error.hpp"
+#include "core/runtime_module.hpp"
 #include "geometry/msh_precheck.hpp"
 
 namespace lamina::geometry {
@@ -14,39 +15,17 @@ namespace {
 
 using ImportFunction = void (*)(const std::string*, ImportedMesh*);
 
-/// The module file: beside the running program (the installed layout), else where the build put it.
-std::vector<std::filesystem::path> module_candidates() {
-  std::vector<std::filesystem::path> candidates;
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    candidates.push_back(exe.parent_path() / LAMINA_GMSH_READER_NAME);
-    candidates.push_back(exe.parent_path().parent_path() / LAMINA_GMSH_READER_NAME);  // tests/, bench/
-  }
-  candidates.push_back(LAMINA_GMSH_READER_PATH);
-  return candidates;
-}
-
 ImportFunction load_import_function() {
   static std::mutex mutex;
   static ImportFunction function = nullptr;
   std::lock_guard<std::mutex> lock(mutex);
   if (function) return function;
   std::string why;
-  for (const auto& candidate : module_candidates()) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(candidate, ec)) continue;
-    void* handle = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (!handle) {
-      why = dlerror();
-      continue;
-    }
-    function = reinterpret_cast<ImportFunction>(dlsym(handle, "lamina_gmsh_import"));
-    if (function) return function;
-    why = candidate.string() + " has no lamina_gmsh_import";
-  }
-  throw std::runtime_error("the Gmsh reader module " + std::string(LAMINA_GMSH_READER_NAME) + " could not be loaded" +
-              (why.empty() ? " (not found beside the program or in the build tree)" : ": " + why));
+  function = reinterpret_cast<ImportFunction>(
+      open_runtime_module(LAMINA_GMSH_READER_NAME, LAMINA_GMSH_READER_PATH, "lamina_gmsh_import", why));
+  if (!function)
+    throw std::runtime_error("the Gmsh reader module " + std::string(LAMINA_GMSH_READER_NAME) + " could not be loaded: " + why);
+  return function;
 }
 
 }  // namespace
