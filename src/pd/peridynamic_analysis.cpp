@@ -4,7 +4,6 @@
 
 #include <fmt/format.h>
 
-#include <Eigen/CholmodSupport>
 #include <Spectra/MatOp/SparseSymMatProd.h>
 #include <Spectra/SymGEigsSolver.h>
 #include <algorithm>
@@ -19,6 +18,7 @@
 #include "pd/lean_peridynamic_solid.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
+#include "solve/cholmod_llt.hpp"
 #include "solve/petsc_linear_solver.hpp"
 #include "solve/slepc_eigen_solver.hpp"
 
@@ -66,7 +66,7 @@ class CholmodRegularInverse {
 
  private:
   const solve::SparseMatrix& upper_;
-  Eigen::CholmodSupernodalLLT<solve::SparseMatrix, Eigen::Upper> llt_;
+  solve::CholmodLlt llt_;
   bool ok_ = false;
 };
 

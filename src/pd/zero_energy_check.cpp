@@ -1,9 +1,9 @@
 #include "pd/zero_energy_check.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <cmath>
 
 #include "pd/peridynamic_model.hpp"
+#include "solve/cholmod_llt.hpp"
 
 namespace lamina::pd {
 
@@ -38,8 +38,7 @@ ZeroEnergyReport find_zero_energy_modes(const solve::SparseMatrix& reduced_upper
   if (m == 0) return report;
   const Eigen::VectorXd scale = (0.25 * absolute_row_sums(reduced_upper)).cwiseMax(1e-300).cwiseInverse().cwiseSqrt();
   solve::SparseMatrix scaled = scale.asDiagonal() * reduced_upper * scale.asDiagonal();
-  Eigen::CholmodSupernodalLLT<solve::SparseMatrix, Eigen::Upper> llt;
-  llt.cholmod().print = 0;  // a failed factorisation is an answer here, not a warning
+  solve::CholmodLlt llt;  // a failed factorisation is an answer here, not a warning (no CHOLMOD printing)
   llt.compute(scaled);
   Eigen::VectorXd mode;
   if (llt.info() != Eigen::Success) {

@@ -1,6 +1,5 @@
 #include "solve/sparse_linear_solver.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 #include <omp.h>
@@ -16,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/memory.hpp"
 #include "core/stopwatch.hpp"
+#include "solve/cholmod_llt.hpp"
 
 namespace lamina::solve {
 
@@ -60,15 +60,6 @@ void install_cholmod_allocators() {
   }();
   (void)installed;
 }
-
-/// CHOLMOD's supernodal LLT with access to the factor for the condition estimate.
-class CholmodLlt : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Upper> {
- public:
-  Real rcond() {
-    if (!m_cholmodFactor) return 0.0;
-    return cholmod_rcond(m_cholmodFactor, &this->cholmod());
-  }
-};
 
 Real relative_residual(const Eigen::VectorXd& r, const Eigen::VectorXd& b) {
   const Real nb = b.norm();
@@ -144,14 +135,7 @@ Eigen::VectorXd solve_symmetric(const SparseMatrix& upper, const Eigen::VectorXd
   if (!options.force_fallback) {
     install_cholmod_allocators();
     auto start = std::chrono::steady_clock::now();
-    CholmodLlt llt;
-    llt.cholmod().print = 0;  // lamina reports a failed factorisation itself, in one line
-    // Fill-reducing ordering: both AMD and METIS, the one with the sparser factor kept. CHOLMOD's own
-    // default tries METIS only when AMD's fill is large, and on the EFG systems (hundreds of neighbours
-    // per node) it kept AMD where METIS factors 3.5 x faster (R1a 21 x 21 x 5: 2.4 s -> 0.69 s).
-    llt.cholmod().nmethods = 2;
-    llt.cholmod().method[0].ordering = CHOLMOD_AMD;
-    llt.cholmod().method[1].ordering = CHOLMOD_METIS;
+    CholmodLlt llt;  // AMD or METIS ordering, no CHOLMOD printing (solve/cholmod_llt.hpp)
     const int saved_threads = omp_get_max_threads();
     if (options.factor_threads > 0) omp_set_num_threads(std::min(options.factor_threads, saved_threads));
     llt.compute(upper);
