@@ -26,7 +26,7 @@ struct MlsWorkspace {
   std::vector<Real> unsorted_offsets, unsorted_inverse_radii;
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * n): x_d - x_I,d and 1 / R_I,d of the n neighbours
-  // (the unsorted buffers hold `capacity` per row)
+  // (the unsorted buffers of gather(): one row per direction of the candidate count)
   std::vector<Real> offsets;
   std::vector<Real> inverse_radii;
   std::vector<Real> weights;        // 10 arrays of n: w, w_x, w_y, w_z, w_xx, w_yy, w_zz, w_xy, w_yz, w_zx
@@ -122,7 +122,7 @@ void compute_sphere_weights(const WeightFunction& function, std::size_t n, const
       offset[d] = offsets[d * n + j];
       inverse[d] = inverse_radii[d * n + j];
     }
-      Real squared = 0.0;
+    Real squared = 0.0;
     for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
     const Real distance = std::sqrt(squared);
     const Real inverse_squared = inverse[0] * inverse[0];
