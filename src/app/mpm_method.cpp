@@ -91,6 +91,12 @@ std::unique_ptr<MethodOptions> read_mpm(const io::Case& c, const io::NodeReader&
     // quasi-static: the physical masses (default) or fictitious stiffness-proportional ones; dynamic: physical
     const bool quasi_static = o.analysis == mpm::MpmOptions::Kind::quasi_static;
     const bool stiffness_mass = section.word("mass_scaling", {"physical", "stiffness"}, "physical") == "stiffness";
+    {
+      const bool newton = section.word("solver", {"explicit", "newton"}, quasi_static && !stiffness_mass ? "newton" : "explicit") == "newton";
+      if (newton && !quasi_static) section.child("solver").error("newton solves the quasi_static levels; a dynamic analysis is explicit");
+      if (newton && stiffness_mass) section.child("solver").error("newton needs no masses: leave out mass_scaling");
+      o.solver = newton ? mpm::MpmOptions::Solver::newton : mpm::MpmOptions::Solver::explicit_dynamics;
+    }
     o.mass_scaling = quasi_static && stiffness_mass;
     // with mass scaling: adaptive damping by default; kinetic damping is the default with physical mass
     kinetic_default = quasi_static && !o.mass_scaling;

@@ -83,6 +83,12 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
   rotation_free_ = Eigen::Matrix3Xd::Ones(3, n);
   f_int_ = m_int_ = f_ext_ = m_ext_ = f_net_ = Eigen::Matrix3Xd::Zero(3, n);
 
+  if (problem_.options.solver == MpmOptions::Solver::newton)
+    for (const auto& c : problem_.constraints)
+      for (int a = 0; a < 3; ++a)
+        if (c.velocity[static_cast<std::size_t>(a)] && !c.select.nodes.empty())
+          throw InputError("mpm.solver", "fixed components only with newton (a prescribed velocity needs mpm.solver: explicit)",
+                           "a prescribed velocity in boundary");
   for (const auto& c : problem_.constraints)
     for (Index node : c.select.nodes)
       for (int a = 0; a < 3; ++a) {
@@ -495,12 +501,15 @@ void MpmAnalysis::run(OutputSink& sink) {
     loop_ = RunLoop{};
   }
   if (o.analysis == MpmOptions::Kind::quasi_static) {
+    const bool newton = o.solver == MpmOptions::Solver::newton;
     for (; loop_.level <= o.load_levels; ++loop_.level, loop_.level_steps = 0) {
       const int level = loop_.level;
       const Real load = static_cast<Real>(level) / o.load_levels, previous = static_cast<Real>(level - 1) / o.load_levels;
       Index& level_steps = loop_.level_steps;
       if (level_steps == 0) begin_level();
-      while (true) {
+      // Newton (the default): the whole level, or up to where it stopped; explicit dynamics for the rest
+      const bool explicit_steps = !newton || (level_steps == 0 && !solve_level_newton(previous, load, sink)) || level_steps > 0;
+      while (explicit_steps) {
         const bool ramping = level_steps < o.level_ramp_steps;
         advance(ramping ? previous + (load - previous) * static_cast<Real>(level_steps + 1) / static_cast<Real>(o.level_ramp_steps)
                         : load);
@@ -528,7 +537,9 @@ void MpmAnalysis::run(OutputSink& sink) {
       level_residual_.push_back(residual_ratio_);
       level_step_counts_.push_back(static_cast<int>(level_steps));
       sink.progress(static_cast<Real>(level) / o.load_levels,
-                    fmt::format("level {}/{} residual {:.2e} steps {}", level, o.load_levels, residual_ratio_, steps_));
+                    explicit_steps ? fmt::format("level {}/{} residual {:.2e} steps {}", level, o.load_levels, residual_ratio_, steps_)
+                                   : fmt::format("level {}/{} residual {:.2e} Newton iterations {}", level, o.load_levels,
+                                                 residual_ratio_, newton_iterations_));
       gather_state();
       sink.output_point(steps_, time_, load);
       loop_.level_done = true;  // a checkpoint here resumes at the next level

@@ -39,6 +39,7 @@
 #include "mpm/background_grid.hpp"
 #include "mpm/cpdi2_domains.hpp"
 #include "mpm/mpm_problem.hpp"
+#include "mpm/shell_statics.hpp"
 #include "parallel/communicator.hpp"
 #include "shell/belytschko_tsay_shell.hpp"
 
@@ -121,6 +122,18 @@ class MpmAnalysis : public Analysis {
   Real adaptive_damping_coefficient() const;
   /// Start of a quasi-static level: the increment of the damping estimate restarts, the masses are refreshed.
   void begin_level();
+  /// mpm.solver newton (mpm_newton.cpp): the static state at load factor `to` from the one at `from`, in
+  /// as many sub-increments as Newton's method needs. Returns false, at the last converged state and with
+  /// the reason in the progress line, if it cannot get there (the level then goes on by explicit dynamics).
+  bool solve_level_newton(Real from, Real to, OutputSink& sink);
+  /// For the internal forces f_int, m_int and the loads f_ext_, m_ext_: the squared residual norm of
+  /// stage_loads_and_residual (components weighted by 1 / mass, 1 / inertia) and its scale, the larger of
+  /// the external and internal squared norms (residual ratio = sqrt(first / second)).
+  std::pair<Real, Real> weighted_residual(const Eigen::Matrix3Xd& f_int, const Eigen::Matrix3Xd& m_int) const;
+  std::unique_ptr<ShellStatics> statics_;
+  Real newton_step_ = 0;            // the last sub-increment (load factor) size
+  Index newton_increments_ = 0, newton_iterations_ = 0, newton_stopped_levels_ = 0;
+  std::array<Real, 3> newton_time_{};  // seconds: forces, tangent, linear solve
 
   /// The ordered stages of one step (core/step_stage.hpp); mass_scaled adds the fictitious-mass stage
   /// after the element stage.

@@ -46,6 +46,12 @@ void MpmAnalysis::state_fields(Self& self, Archive& a) {
   a.field("mpm.loop.level_steps", self.loop_.level_steps);
   a.field("mpm.loop.level_done", self.loop_.level_done);
   a.field("mpm.loop.next_output", self.loop_.next_output);
+  if (self.problem_.options.solver == MpmOptions::Solver::newton) {  // the sub-increment size carried between levels
+    a.field("mpm.newton.step", self.newton_step_);
+    a.field("mpm.newton.iterations", self.newton_iterations_);
+    a.field("mpm.newton.increments", self.newton_increments_);
+    a.field("mpm.newton.stopped_levels", self.newton_stopped_levels_);
+  }
   if (self.scaled_) {  // mass-scaled quasi-static: the fictitious masses and the damping estimate's state
     a.field("mpm.mass_scaling.mass", self.dyn_mass_);
     a.field("mpm.mass_scaling.inertia", self.dyn_inertia_);

@@ -1,6 +1,7 @@
 // MpmAnalysis results: probes, built-in probes, output frames (nodal fields for VTU), warnings,
 // counts and stage timings (the Analysis / output-sink interface, core/analysis.hpp).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -91,7 +92,10 @@ std::map<std::string, Real> MpmAnalysis::builtin_probes() const {
           {"residual_ratio", residual_ratio_},
           {"time_step", dt_},
           {"unconverged_levels", static_cast<Real>(unconverged_levels_.size())},
-          {"time_step_grid_controlled", dt_control_ == "grid" ? 1.0 : 0.0}};
+          {"time_step_grid_controlled", dt_control_ == "grid" ? 1.0 : 0.0},
+          {"newton_iterations", static_cast<Real>(newton_iterations_)},
+          {"newton_increments", static_cast<Real>(newton_increments_)},
+          {"newton_stopped_levels", static_cast<Real>(newton_stopped_levels_)}};
 }
 
 OutputFrame MpmAnalysis::frame() const {
@@ -156,12 +160,25 @@ std::vector<std::string> MpmAnalysis::warnings() const {
                                 "or set shell.drilling: 0",
                                 held, rotation_free_.cols(), s.drilling));
   }
+  const MpmOptions& o = problem_.options;
+  if (o.analysis == MpmOptions::Kind::quasi_static && o.solver == MpmOptions::Solver::newton) {
+    std::vector<std::string> unused;  // explicit-dynamics settings a Newton level does not use
+    if (o.fixed_time_step > 0) unused.push_back("time_step.fixed");
+    if (o.level_ramp_steps > 0) unused.push_back("level_ramp_steps");
+    if (o.mass_damping > 0) unused.push_back("damping.mass");
+    if (o.flip > 0) unused.push_back("flip");
+    if (!unused.empty())
+      out.push_back(fmt::format("mpm.{} set with the Newton quasi-static solver (the default): it acts only in a level "
+                                "Newton cannot finish, which goes on by explicit dynamics; mpm.solver: explicit runs every "
+                                "level that way",
+                                fmt::join(unused, ", mpm.")));
+  }
   if (problem_.material.model != material::MaterialModel::j2_plasticity) return out;
   if (s.thickness_points <= 3)
     out.push_back(fmt::format("shell.thickness_points = {} with j2_plasticity: so few points cannot represent plastic "
                               "bending (3 Lobatto points carry at most the first-yield moment, a real section 1.5 x); use 7",
                               s.thickness_points));
-  if (problem_.options.analysis == MpmOptions::Kind::quasi_static && problem_.options.level_ramp_steps == 0)
+  if (o.analysis == MpmOptions::Kind::quasi_static && o.solver == MpmOptions::Solver::explicit_dynamics && o.level_ramp_steps == 0)
     out.push_back("mpm.level_ramp_steps = 0 with j2_plasticity: each load increment is applied at once and its dynamic "
                   "overshoot yields the material early; ramp it over a few thousand steps");
   const Real membrane = s.hourglass_membrane >= 0.0 ? s.hourglass_membrane : s.hourglass;
@@ -184,6 +201,11 @@ RunCounts MpmAnalysis::counts() const {
 std::map<std::string, Real> MpmAnalysis::timings() const {
   std::map<std::string, Real> t;
   for (std::size_t k = 0; k < stages_.size(); ++k) t[std::string(stages_[k].name) + "_s"] = stage_time_[k];
+  if (problem_.options.solver == MpmOptions::Solver::newton) {
+    t["newton_forces_s"] = newton_time_[0];
+    t["newton_tangent_s"] = newton_time_[1];
+    t["newton_solve_s"] = newton_time_[2];
+  }
   return t;
 }
 

@@ -20,6 +20,11 @@ namespace lamina::mpm {
 struct MpmOptions {
   enum class Kind { quasi_static, dynamic };
   Kind analysis = Kind::quasi_static;
+  /// quasi-static: how each load level reaches its static state. newton (default): Newton's method on the
+  /// shell nodes (no grid; mpm_newton.cpp), a level it cannot finish going on by explicit dynamics;
+  /// explicit: damped explicit dynamics through the grid (seed 000). Dynamic analyses are explicit.
+  enum class Solver { explicit_dynamics, newton };
+  Solver solver = Solver::newton;
   int load_levels = 10;           // quasi-static output levels (load factor k / load_levels)
   Real end_time = 1.0;            // dynamic
   int output_points = 10;         // dynamic: number of evenly spaced output times

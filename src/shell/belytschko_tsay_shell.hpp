@@ -91,6 +91,7 @@ class BelytschkoTsayShell {
   BelytschkoTsayShell(const ShellSection& section, const material::ShellMaterial& material);
 
   int thickness_points() const { return static_cast<int>(rule_.points.size()); }
+  const material::ShellMaterial& material() const { return material_; }
   /// Doubles per through-thickness point: 5 stresses and the material's history values.
   int point_stride() const { return material::kStressComponents + material_.state_size(); }
   /// Doubles of stress state per element (point_stride() per through-thickness point).

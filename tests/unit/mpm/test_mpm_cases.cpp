@@ -1,7 +1,8 @@
 // `method: mpm` end to end through the lamina binary: bad shell meshes and a grid too coarse for the
 // elements are rejected with exit 2 and a clear message; a run made unstable stops with exit 3;
 // a small linear cantilever matches beam theory (issue 5 acceptance 5); shell.hourglass_bending is
-// read and range-checked.
+// read and range-checked; the Newton quasi-static solver (the default) against beam theory and the
+// elastica, its input checks, and its fall-back to explicit dynamics beyond a collapse load.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -93,7 +94,7 @@ TEST(mpm_Cases, GridTooCoarseIsRejected) {
 }
 
 TEST(mpm_Cases, UnstableRunStopsWithExitThree) {
-  const Outcome o = run_case("unstable", kStrip, "--set mpm.time_step.fixed=0.01");
+  const Outcome o = run_case("unstable", kStrip, "--set mpm.solver=explicit --set mpm.time_step.fixed=0.01");
   EXPECT_EQ(o.exit_code, 3) << o.output;
   EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
 }
@@ -112,7 +113,7 @@ TEST(mpm_Cases, MassScaledAndPhysicalQuasiStaticAgree) {
   const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
   const Outcome scaled = run_case("scaled", kStrip, "--set mpm.mass_scaling=stiffness");
   ASSERT_EQ(scaled.exit_code, 0) << scaled.output;
-  const Outcome physical = run_case("physical", kStrip);
+  const Outcome physical = run_case("physical", kStrip, "--set mpm.solver=explicit");
   ASSERT_EQ(physical.exit_code, 0) << physical.output;
   EXPECT_NEAR(summary_value("scaled", "w_tip"), exact, 0.01 * exact);
   EXPECT_NEAR(summary_value("physical", "w_tip"), exact, 0.01 * exact);
@@ -205,18 +206,99 @@ boundary:
 loads:
   - {select: {set: xmax}, traction: [250, 0, 0]}
 )";
-  const Outcome plain = run_case("plastic_warnings", yaml, "", true);
+  const Outcome plain = run_case("plastic_warnings", yaml, "--set mpm.solver=explicit", true);
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
   EXPECT_NE(plain.output.find("warning: shell.thickness_points = 3"), std::string::npos) << plain.output;
   EXPECT_NE(plain.output.find("warning: mpm.level_ramp_steps = 0"), std::string::npos) << plain.output;
+  // the Newton levels (the default) are static: no overshoot, no ramp advice
+  const Outcome newton = run_case("plastic_warnings_newton", yaml, "", true);
+  ASSERT_EQ(newton.exit_code, 0) << newton.output;
+  EXPECT_EQ(newton.output.find("level_ramp_steps"), std::string::npos) << newton.output;
   EXPECT_EQ(plain.output.find("shell.hourglass_membrane"), std::string::npos) << plain.output;  // physical: no advice
-  const Outcome springs = run_case("plastic_warnings_springs", yaml, "--set shell.hourglass=0.1", true);
+  const Outcome springs = run_case("plastic_warnings_springs", yaml, "--set mpm.solver=explicit --set shell.hourglass=0.1", true);
   ASSERT_EQ(springs.exit_code, 0) << springs.output;
   EXPECT_NE(springs.output.find("shell.hourglass_membrane"), std::string::npos) << springs.output;
   const Outcome advised = run_case("plastic_warnings_advised", yaml,
-                                   "--set shell.thickness_points=7 --set mpm.level_ramp_steps=2000", true);
+                                   "--set mpm.solver=explicit --set shell.thickness_points=7 --set mpm.level_ramp_steps=2000", true);
   ASSERT_EQ(advised.exit_code, 0) << advised.output;
   EXPECT_EQ(advised.output.find("warning"), std::string::npos) << advised.output;
+}
+
+// Newton (the quasi-static default) and damped explicit dynamics reach the same linear answer.
+TEST(mpm_Cases, NewtonAndExplicitQuasiStaticAgree) {
+  const double exact = 0.004 * 1000.0 / 300.0 + 0.004 * 10.0 / (5.0 / 6.0 * 6.0e5 * 0.1);
+  const Outcome newton = run_case("newton_linear", kStrip);
+  ASSERT_EQ(newton.exit_code, 0) << newton.output;
+  const Outcome dynamics = run_case("explicit_linear", kStrip, "--set mpm.solver=explicit");
+  ASSERT_EQ(dynamics.exit_code, 0) << dynamics.output;
+  EXPECT_NEAR(summary_value("newton_linear", "w_tip"), exact, 0.01 * exact);
+  EXPECT_NEAR(summary_value("newton_linear", "w_tip"), summary_value("explicit_linear", "w_tip"), 0.005 * exact);
+  EXPECT_GT(summary_value("newton_linear", "newton_iterations"), 0.0);
+  EXPECT_EQ(summary_value("explicit_linear", "newton_iterations"), 0.0);
+  EXPECT_LT(summary_value("newton_linear", "residual_ratio"), 1e-5);
+}
+
+// The elastica: an end moment M = pi EI / L bends the strip into a half circle (kappa = M / EI), tip at
+// u = L (sin(pi) / pi - 1) = -L, w = L (1 - cos(pi)) / pi = 2 L / pi; the rotations are large (pi at the tip).
+TEST(mpm_Cases, NewtonRollsTheStripIntoAHalfCircle) {
+  const std::string yaml = kStrip.substr(0, kStrip.find("loads:")) + R"(loads: []
+mpm:
+  load_levels: 4
+  tolerance: 1.0e-6
+  moments:
+    - {select: {set: xmax}, edge_moment: [0, -31.4159265358979, 0]}   # per unit width: pi EI / L, EI = 100
+probes:
+  - {name: u_tip, field: displacement, component: x, at: [10, 0, 0]}
+  - {name: w_tip, field: displacement, component: z, at: [10, 0, 0]}
+)";
+  const Outcome o = run_case("half_circle", yaml);
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const double pi = std::acos(-1.0);
+  EXPECT_NEAR(summary_value("half_circle", "u_tip"), -10.0, 0.01 * 10.0);
+  EXPECT_NEAR(summary_value("half_circle", "w_tip"), 20.0 / pi, 0.01 * 20.0 / pi);
+  EXPECT_NEAR(summary_value("half_circle", "energy_ratio"), 1.0, 0.01);
+  EXPECT_EQ(summary_value("half_circle", "newton_stopped_levels"), 0.0);
+}
+
+TEST(mpm_Cases, NewtonInputIsChecked) {
+  const Outcome dynamic = run_case("newton_dynamic", kStrip, "--set mpm.analysis=dynamic --set mpm.solver=newton", true);
+  EXPECT_EQ(dynamic.exit_code, 2) << dynamic.output;
+  EXPECT_NE(dynamic.output.find("mpm.solver"), std::string::npos) << dynamic.output;
+  const Outcome word = run_case("newton_word", kStrip, "--set mpm.solver=implicit", true);
+  EXPECT_EQ(word.exit_code, 2) << word.output;
+  EXPECT_NE(word.output.find("newton"), std::string::npos) << word.output;
+  const Outcome scaled = run_case("newton_scaled", kStrip, "--set mpm.solver=newton --set mpm.mass_scaling=stiffness", true);
+  EXPECT_EQ(scaled.exit_code, 2) << scaled.output;
+  // an explicit-dynamics setting left in a Newton run is pointed out
+  const Outcome unused = run_case("newton_unused", kStrip, "--set mpm.time_step.fixed=0.001", true);
+  ASSERT_EQ(unused.exit_code, 0) << unused.output;
+  EXPECT_NE(unused.output.find("warning: mpm.time_step.fixed set with the Newton"), std::string::npos) << unused.output;
+}
+
+// Beyond the collapse load there is no static state: Newton stops, the level goes on by explicit
+// dynamics (here cut short by max_steps_per_level) and both facts are reported.
+TEST(mpm_Cases, NewtonFallsBackToExplicitDynamicsBeyondCollapse) {
+  const std::string yaml = R"(
+title: strip pulled past its yield load
+method: mpm
+materials:
+  - {name: s, model: j2_plasticity, E: 1.2e6, nu: 0.0, density: 1.0, yield: 600, hardening: 0}
+geometry: {type: plate, min: [0, 0], max: [10, 1], thickness: 0.1}
+discretization: {elements: [10, 1]}
+boundary:
+  - {select: {set: xmin}, fix: [x, y, z, rx, ry, rz]}
+loads:
+  - {select: {set: xmax}, traction: [90, 0, 0]}   # 1.5 x the yield load 600 x 0.1 x 1
+shell: {thickness_points: 5}
+mpm: {load_levels: 1, max_steps_per_level: 200}
+probes:
+  - {name: u_tip, field: displacement, component: x, at: [10, 0, 0]}
+)";
+  const Outcome o = run_case("collapse", yaml);
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(summary_value("collapse", "newton_stopped_levels"), 1.0);
+  EXPECT_EQ(summary_value("collapse", "unconverged_levels"), 1.0);
+  EXPECT_GT(summary_value("collapse", "u_tip"), 10.0 * 600.0 / 1.2e6);  // past the yield elongation
 }
 
 }  // namespace
