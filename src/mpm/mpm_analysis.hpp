@@ -133,6 +133,7 @@ class MpmAnalysis : public Analysis {
   std::unique_ptr<ShellStatics> statics_;
   Real newton_step_ = 0;            // the last sub-increment (load factor) size
   Index newton_increments_ = 0, newton_iterations_ = 0, newton_stopped_levels_ = 0;
+  Real newton_first_stop_load_ = 0;  // load factor where Newton first stopped (under load control: a limit point); 0 = never
   std::array<Real, 3> newton_time_{};  // seconds: forces, tangent, linear solve
 
   /// The ordered stages of one step (core/step_stage.hpp); mass_scaled adds the fictitious-mass stage

@@ -51,6 +51,7 @@ void MpmAnalysis::state_fields(Self& self, Archive& a) {
     a.field("mpm.newton.iterations", self.newton_iterations_);
     a.field("mpm.newton.increments", self.newton_increments_);
     a.field("mpm.newton.stopped_levels", self.newton_stopped_levels_);
+    a.field("mpm.newton.first_stop_load", self.newton_first_stop_load_);
   }
   if (self.scaled_) {  // mass-scaled quasi-static: the fictitious masses and the damping estimate's state
     a.field("mpm.mass_scaling.mass", self.dyn_mass_);

@@ -175,7 +175,7 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
     compute_external_forces(to);
     return true;
   }
-  ++newton_stopped_levels_;
+  if (newton_stopped_levels_++ == 0) newton_first_stop_load_ = reached;
   newton_step_ = 0;
   sink.progress(reached, fmt::format("Newton stopped at load factor {:.6g} ({}); the level to {:.6g} goes on by explicit "
                                      "dynamics",

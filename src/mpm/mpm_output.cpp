@@ -95,7 +95,8 @@ std::map<std::string, Real> MpmAnalysis::builtin_probes() const {
           {"time_step_grid_controlled", dt_control_ == "grid" ? 1.0 : 0.0},
           {"newton_iterations", static_cast<Real>(newton_iterations_)},
           {"newton_increments", static_cast<Real>(newton_increments_)},
-          {"newton_stopped_levels", static_cast<Real>(newton_stopped_levels_)}};
+          {"newton_stopped_levels", static_cast<Real>(newton_stopped_levels_)},
+          {"newton_first_stop_load", newton_first_stop_load_}};
 }
 
 OutputFrame MpmAnalysis::frame() const {

@@ -297,6 +297,8 @@ probes:
   const Outcome o = run_case("collapse", yaml);
   ASSERT_EQ(o.exit_code, 0) << o.output;
   EXPECT_EQ(summary_value("collapse", "newton_stopped_levels"), 1.0);
+  EXPECT_GT(summary_value("collapse", "newton_first_stop_load"), 0.6);  // yield at 2 / 3 of the load
+  EXPECT_LT(summary_value("collapse", "newton_first_stop_load"), 0.7);
   EXPECT_EQ(summary_value("collapse", "unconverged_levels"), 1.0);
   EXPECT_GT(summary_value("collapse", "u_tip"), 10.0 * 600.0 / 1.2e6);  // past the yield elongation
 }
