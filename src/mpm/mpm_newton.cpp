@@ -30,6 +30,7 @@ constexpr int kMaxIterations = 15;             // per sub-increment (then the su
 constexpr int kMaxHalvings = 12;               // a level in at most 2^12 sub-increments
 constexpr Real kMaxRotation = 0.15;            // rad per sub-increment at any node
 constexpr Real kMaxCorrectionRotation = 0.1;   // rad per Newton correction at any node
+constexpr Real kJumpEnergyGap = 0.25;          // share of a sub-increment's work not stored: a jump
 }  // namespace
 
 std::pair<Real, Real> MpmAnalysis::weighted_residual(const Eigen::Matrix3Xd& f_int, const Eigen::Matrix3Xd& m_int) const {
@@ -144,6 +145,18 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
         work += (0.5 * (f_ext_.col(i) + f_ext_start.col(i))).dot(u.col(i)) +
                 (0.5 * (m_ext_.col(i) + m_ext_start.col(i))).dot(theta.col(i));
       energy_.external += work;
+      // A static path under load control is continuous: the sub-increment's external work (trapezoidal)
+      // and the energy it stored agree to second order. Newton converging on another branch across a
+      // limit point (a snap-through without its dynamics) leaves a gap of the order of the work itself.
+      const Real stored = done.internal_work + done.hourglass_work;
+      const Real gap = (work - stored) / std::max({std::abs(work), std::abs(stored), std::numeric_limits<Real>::min()});
+      newton_largest_gap_ = std::max(newton_largest_gap_, gap);
+      if (gap > kJumpEnergyGap) {
+        if (newton_jumps_++ == 0) newton_first_jump_load_ = reached;
+        sink.progress(target, fmt::format("Newton jumped to another branch between load factors {:.6g} and {:.6g} (a limit "
+                                          "point: {:.0f} % of the work went into no stored energy)",
+                                          reached, target, 100 * gap));
+      }
       f_ext_start = f_ext_;
       m_ext_start = m_ext_;
       start = std::move(end);

@@ -96,7 +96,10 @@ std::map<std::string, Real> MpmAnalysis::builtin_probes() const {
           {"newton_iterations", static_cast<Real>(newton_iterations_)},
           {"newton_increments", static_cast<Real>(newton_increments_)},
           {"newton_stopped_levels", static_cast<Real>(newton_stopped_levels_)},
-          {"newton_first_stop_load", newton_first_stop_load_}};
+          {"newton_first_stop_load", newton_first_stop_load_},
+          {"newton_jumps", static_cast<Real>(newton_jumps_)},
+          {"newton_first_jump_load", newton_first_jump_load_},
+          {"newton_largest_energy_gap", newton_largest_gap_}};
 }
 
 OutputFrame MpmAnalysis::frame() const {

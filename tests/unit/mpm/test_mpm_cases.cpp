@@ -303,4 +303,39 @@ probes:
   EXPECT_GT(summary_value("collapse", "u_tip"), 10.0 * 600.0 / 1.2e6);  // past the yield elongation
 }
 
+// Past a limit point a load-controlled static path jumps: Sze's hinged roof (t = 12.7, first limit at
+// P / P_max ~ 0.742, W_C ~ -10.4 to -11.3; after the snap W_C ~ -27). On this coarse quarter Newton
+// converges on the far branch; the sub-increment that jumped stores far less energy than the work done
+// on it, which is reported (newton_jumps, newton_first_jump_load just below the limit).
+TEST(mpm_Cases, NewtonReportsAJumpAcrossALimitPoint) {
+  const std::string yaml = R"(
+title: hinged roof
+method: mpm
+materials:
+  - {name: shell, model: linear_elastic, E: 3102.75, nu: 0.3, density: 1.0}
+geometry: {type: cylinder, radius: 2540, length: 254, axis: y, angle: 5.729577951308232, thickness: 12.7}
+discretization: {elements: [8, 8]}
+boundary:
+  - {select: {set: end1}, fix: [y, rx, rz]}
+  - {select: {set: edge0}, fix: [x, ry, rz]}
+  - {select: {set: edge1}, fix: [x, y, z]}
+loads:
+  - {select: {nearest: [0, 254, 2540]}, force: [0, 0, -750]}
+mpm: {load_levels: 40}
+probes:
+  - {name: w_C, field: displacement, component: z, at: [0, 254, 2540]}
+)";
+  const Outcome o = run_case("roof_jump", yaml);
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(summary_value("roof_jump", "newton_jumps"), 1.0);
+  EXPECT_GT(summary_value("roof_jump", "newton_first_jump_load"), 0.70);
+  EXPECT_LT(summary_value("roof_jump", "newton_first_jump_load"), 0.742);
+  EXPECT_LT(summary_value("roof_jump", "w_C"), -25.0);  // on the far branch at P_max
+  // no jump on a smooth path: the linear cantilever
+  const Outcome smooth = run_case("no_jump", kStrip);
+  ASSERT_EQ(smooth.exit_code, 0) << smooth.output;
+  EXPECT_EQ(summary_value("no_jump", "newton_jumps"), 0.0);
+  EXPECT_LT(summary_value("no_jump", "newton_largest_energy_gap"), 0.01);
+}
+
 }  // namespace
