@@ -52,6 +52,9 @@ void MpmAnalysis::state_fields(Self& self, Archive& a) {
     a.field("mpm.newton.increments", self.newton_increments_);
     a.field("mpm.newton.stopped_levels", self.newton_stopped_levels_);
     a.field("mpm.newton.first_stop_load", self.newton_first_stop_load_);
+    a.field("mpm.newton.jumps", self.newton_jumps_);
+    a.field("mpm.newton.first_jump_load", self.newton_first_jump_load_);
+    a.field("mpm.newton.largest_energy_gap", self.newton_largest_gap_);
   }
   if (self.scaled_) {  // mass-scaled quasi-static: the fictitious masses and the damping estimate's state
     a.field("mpm.mass_scaling.mass", self.dyn_mass_);
