@@ -136,7 +136,7 @@ class MpmAnalysis : public Analysis {
   Real newton_first_stop_load_ = 0;  // load factor where Newton first stopped (under load control: a limit point); 0 = never
   Index newton_jumps_ = 0;           // sub-increments that converged on another branch (a limit point crossed)
   Real newton_first_jump_load_ = 0;  // the load factor before the first of them; 0 = none
-  Real newton_largest_gap_ = -1;     // largest share of a sub-increment's work not stored (diagnostic)
+  Real newton_largest_gap_ = 0;      // largest share of a sub-increment's work not stored, 0 if none (diagnostic)
   std::array<Real, 3> newton_time_{};  // seconds: forces, tangent, linear solve
 
   /// The ordered stages of one step (core/step_stage.hpp); mass_scaled adds the fictitious-mass stage
