@@ -29,7 +29,7 @@ Ramp scaled_ramp(const Ramp& r, Real scale) {
 void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, shell::ShellSection& s) {
   io::NodeReader section(c.resolved["shell"], "shell", &mpm_section.sink());
   if (!section.defined() || !section.expect_map()) return;
-  s.thickness_points = static_cast<int>(section.integer("thickness_points", 3, 1, 7));
+  s.thickness_points = static_cast<int>(section.integer("thickness_points", s.thickness_points, 1, 7));
   // hourglass: `physical` (default) or a coefficient r (the seed's springs, with the per-mode keys)
   const io::NodeReader hourglass = section.child("hourglass");
   const std::string text = hourglass.defined() && hourglass.is_scalar() ? hourglass.node().as<std::string>() : "";
@@ -49,8 +49,8 @@ void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, sh
   if (section.has("hourglass_membrane")) s.hourglass_membrane = section.real("hourglass_membrane", std::nullopt, 0.0, 2.0);
   if (section.has("hourglass_transverse"))
     s.hourglass_transverse = section.real("hourglass_transverse", std::nullopt, 0.0, 2.0);
-  s.drilling = section.real("drilling", 0.01, 0.0, 1.0);
-  s.shear_factor = section.real("shear_factor", 5.0 / 6.0, 0.0, 1.0, true);
+  s.drilling = section.real("drilling", s.drilling, 0.0, 1.0);
+  s.shear_factor = section.real("shear_factor", s.shear_factor, 0.0, 1.0, true);
   s.warping_correction = section.boolean("warping_correction", true);
   s.kirchhoff_transverse_hourglass = section.word("transverse_hourglass", {"standard", "kirchhoff"}, "standard") == "kirchhoff";
   section.reject_unknown_keys();

@@ -133,30 +133,36 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
     }
     const Real rotation = theta.cwiseAbs().maxCoeff();
     if (converged && (rotation <= kMaxRotation || step <= smallest)) {
-      // commit: the advanced element state, the energies of the sub-increment, the converged forces
+      // the sub-increment's advanced element state and energies; its external work by the trapezoidal
+      // rule (exact for loads linear along the increment)
       ShellState end;
       const auto clock = Clock::now();
       const IncrementForces done = statics.forces(start, u, theta, &end);
       newton_time_[0] += seconds_since(clock);
-      energy_.internal += done.internal_work;
-      energy_.hourglass += done.hourglass_work;
-      Real work = 0;  // trapezoidal rule: exact for loads linear along the increment
+      Real work = 0;
       for (Index i = 0; i < n; ++i)
         work += (0.5 * (f_ext_.col(i) + f_ext_start.col(i))).dot(u.col(i)) +
                 (0.5 * (m_ext_.col(i) + m_ext_start.col(i))).dot(theta.col(i));
-      energy_.external += work;
-      // A static path under load control is continuous: the sub-increment's external work (trapezoidal)
-      // and the energy it stored agree to second order. Newton converging on another branch across a
-      // limit point (a snap-through without its dynamics) leaves a gap of the order of the work itself.
+      // A static path under load control is continuous: the sub-increment's external work and the energy
+      // it stored agree to second order. Newton converging on another branch across a limit point (a
+      // snap-through without its dynamics) leaves a gap of the order of the work itself: such a
+      // sub-increment is refused and halved, so Newton closes in on the limit point, stops there, and the
+      // snap is left to explicit dynamics.
       const Real stored = done.internal_work + done.hourglass_work;
       const Real gap = (work - stored) / std::max({std::abs(work), std::abs(stored), std::numeric_limits<Real>::min()});
-      newton_largest_gap_ = std::max(newton_largest_gap_, gap);
       if (gap > kJumpEnergyGap) {
         if (newton_jumps_++ == 0) newton_first_jump_load_ = reached;
-        sink.progress(target, fmt::format("Newton jumped to another branch between load factors {:.6g} and {:.6g} (a limit "
-                                          "point: {:.0f} % of the work went into no stored energy)",
-                                          reached, target, 100 * gap));
+        failure = fmt::format("between load factors {:.6g} and {:.6g} it converges only on another branch, {:.0f} % of "
+                              "the work into no stored energy: a limit point",
+                              reached, target, 100 * gap);
+        if (step <= smallest) break;
+        step *= 0.5;
+        continue;
       }
+      newton_largest_gap_ = std::max(newton_largest_gap_, gap);
+      energy_.internal += done.internal_work;
+      energy_.hourglass += done.hourglass_work;
+      energy_.external += work;
       f_ext_start = f_ext_;
       m_ext_start = m_ext_;
       start = std::move(end);

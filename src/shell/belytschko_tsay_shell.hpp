@@ -48,7 +48,7 @@ struct ShellSection {
   HourglassModel hourglass_model = HourglassModel::physical;
   /// Drilling penalty (physical model): energy 1/2 drilling G t A (theta_z - omega_z)^2 at the centre,
   /// omega_z = (dv/dx - du/dy) / 2 (Hughes-Brezzi 1989); 0 = free drilling rotations.
-  Real drilling = 0.01;
+  Real drilling = 0.05;
   Real hourglass = 0.1;              // coefficient model: hourglass coefficient r (membrane, bending, transverse)
   /// Coefficient of the two rotational (bending) hourglass modes; negative = use `hourglass`.
   /// About 1 is the physical value: on a square element the mode theta_y = c h_I (h = [1,-1,1,-1])

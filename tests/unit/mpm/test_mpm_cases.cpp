@@ -307,7 +307,7 @@ probes:
 // P / P_max ~ 0.742, W_C ~ -10.4 to -11.3; after the snap W_C ~ -27). On this coarse quarter Newton
 // converges on the far branch; the sub-increment that jumped stores far less energy than the work done
 // on it, which is reported (newton_jumps, newton_first_jump_load just below the limit).
-TEST(mpm_Cases, NewtonReportsAJumpAcrossALimitPoint) {
+TEST(mpm_Cases, NewtonRefusesAJumpAcrossALimitPoint) {
   const std::string yaml = R"(
 title: hinged roof
 method: mpm
@@ -327,9 +327,14 @@ probes:
 )";
   const Outcome o = run_case("roof_jump", yaml);
   ASSERT_EQ(o.exit_code, 0) << o.output;
-  EXPECT_EQ(summary_value("roof_jump", "newton_jumps"), 1.0);
+  // the sub-increment that converged on the far branch is refused: Newton closes in on the limit point
+  // (Sze et al.: 0.742 P_max on the 16 x 16 quarter), stops there, and explicit dynamics does the snap
+  EXPECT_GE(summary_value("roof_jump", "newton_jumps"), 1.0);
   EXPECT_GT(summary_value("roof_jump", "newton_first_jump_load"), 0.70);
   EXPECT_LT(summary_value("roof_jump", "newton_first_jump_load"), 0.742);
+  EXPECT_EQ(summary_value("roof_jump", "newton_stopped_levels"), 1.0);
+  EXPECT_NEAR(summary_value("roof_jump", "newton_first_stop_load"), 0.742, 0.03);
+  EXPECT_LT(summary_value("roof_jump", "newton_largest_energy_gap"), 0.05);  // no jump committed
   EXPECT_LT(summary_value("roof_jump", "w_C"), -25.0);  // on the far branch at P_max
   // no jump on a smooth path: the linear cantilever
   const Outcome smooth = run_case("no_jump", kStrip);
