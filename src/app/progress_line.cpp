@@ -30,6 +30,13 @@ void ProgressLine::update(Real fraction, const std::string& status) {
   std::fflush(stderr);
 }
 
+void ProgressLine::note(const std::string& text) {
+  if (quiet_) return;
+  finish();
+  std::fprintf(stderr, "lamina: note: %s\n", text.c_str());
+  std::fflush(stderr);
+}
+
 void ProgressLine::finish() {
   if (open_line_) {
     std::fprintf(stderr, "\n");

@@ -14,6 +14,8 @@ class ProgressLine {
   ~ProgressLine();
   void update(Real fraction, const std::string& status);
   void finish();
+  /// One line of its own below the progress line (an event of the run), unless quiet.
+  void note(const std::string& text);
 
  private:
   bool quiet_, terminal_, open_line_ = false;

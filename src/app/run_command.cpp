@@ -117,6 +117,10 @@ class RunSink : public OutputSink {
   }
 
   void progress(Real fraction, const std::string& status) override { progress_.update(fraction, status); }
+  void notice(const std::string& text) override {
+    if (results_) results_->log("NOTE: " + text);
+    progress_.note(text);
+  }
 
   /// output.checkpoint: every n-th output point and / or every s seconds; the case text the
   /// checkpoint must match on restart.

@@ -40,6 +40,9 @@ class OutputSink {
   virtual void output_point(Index step, Real time, Real load_factor) = 0;
   /// Progress of a long run: fraction done in [0,1] and a short status text.
   virtual void progress(Real fraction, const std::string& status) = 0;
+  /// An event of the run the user should read afterwards (a solver that stopped, a fall-back taken):
+  /// one line, kept in the run's log.
+  virtual void notice(const std::string& /*text*/) {}
   /// Called after every step / increment (and after output_point where both fall together), when the
   /// analysis' state is complete: the application may write a checkpoint here (Analysis::save_state)
   /// or stop the run by throwing RunInterrupted.

@@ -126,6 +126,9 @@ ShellMesh generate_shell_mesh(const GeometrySpec& spec, const std::array<int, 2>
     ImportedMesh imported = import_gmsh(spec.file);
     if (!imported.has_quads)
       throw InputError("geometry.file", "a mesh with quadrilateral (shell) elements", "'" + spec.file + "' has none");
+    if (!(spec.thickness > 0))
+      throw InputError("geometry.thickness", "the shell's thickness (a positive number) with a quadrilateral shell mesh",
+                       "none");
     imported.shell.thickness = spec.thickness;
     return std::move(imported.shell);
   }

@@ -362,6 +362,8 @@ Case CaseReader::read() {
     } else if (type == "mesh") {
       s.type = GeometryType::mesh;
       s.file = g.file_path("file", "an existing Gmsh .msh file");
+      // shells: the shell's thickness (required by the shell methods); 2D methods: out of plane (default 1)
+      if (g.has("thickness")) s.thickness = g.real("thickness", std::nullopt, 0.0, inf, true);
     }
     g.reject_unknown_keys();
     geometry_clean = read_cleanly() && !type.empty();

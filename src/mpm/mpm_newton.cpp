@@ -196,9 +196,8 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
   }
   if (newton_stopped_levels_++ == 0) newton_first_stop_load_ = reached;
   newton_step_ = 0;
-  sink.progress(reached, fmt::format("Newton stopped at load factor {:.6g} ({}); the level to {:.6g} goes on by explicit "
-                                     "dynamics",
-                                     reached, failure, to));
+  sink.notice(fmt::format("Newton stopped at load factor {:.6g} ({}); the level to {:.6g} goes on by explicit dynamics",
+                          reached, failure, to));
   locate_grid();
   return false;
 }

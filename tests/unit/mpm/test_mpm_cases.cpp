@@ -301,6 +301,10 @@ probes:
   EXPECT_LT(summary_value("collapse", "newton_first_stop_load"), 0.7);
   EXPECT_EQ(summary_value("collapse", "unconverged_levels"), 1.0);
   EXPECT_GT(summary_value("collapse", "u_tip"), 10.0 * 600.0 / 1.2e6);  // past the yield elongation
+  // the stop is said in the run's log, with where and why
+  std::ifstream log(fs::temp_directory_path() / "lamina_mpm_test_collapse" / "out" / "log.txt");
+  const std::string log_text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(log_text.find("NOTE: Newton stopped at load factor 0.6"), std::string::npos) << log_text;
 }
 
 // Past a limit point a load-controlled static path jumps: Sze's hinged roof (t = 12.7, first limit at
