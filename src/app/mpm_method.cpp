@@ -51,7 +51,7 @@ void read_shell_section(const io::Case& c, const io::NodeReader& mpm_section, sh
     s.hourglass_transverse = section.real("hourglass_transverse", std::nullopt, 0.0, 2.0);
   s.drilling = section.real("drilling", s.drilling, 0.0, 1.0);
   s.shear_factor = section.real("shear_factor", s.shear_factor, 0.0, 1.0, true);
-  s.warping_correction = section.boolean("warping_correction", true);
+  s.warping_correction = section.boolean("warping_correction", s.warping_correction);
   s.kirchhoff_transverse_hourglass = section.word("transverse_hourglass", {"standard", "kirchhoff"}, "standard") == "kirchhoff";
   section.reject_unknown_keys();
 }
