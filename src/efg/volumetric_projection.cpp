@@ -1,6 +1,7 @@
 #include "efg/volumetric_projection.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -80,7 +81,9 @@ bool ShepardPressure::evaluate(const Vec3& x, mls::ShapeFunctionValues& out) con
     if (box) {
       for (int a = 0; a < dimension; ++a) w *= weight_.evaluate(std::abs(d[a]) / radii(a, i)).value;
     } else {
-      w = weight_.evaluate(d.head(dimension).norm() / radii(0, i)).value;
+      Real r2 = 0.0;  // (a loop, not d.head(dimension): GCC 12 warns on the vectorised dynamic-size block of a Vec3)
+      for (int a = 0; a < dimension; ++a) r2 += d[a] * d[a];
+      w = weight_.evaluate(std::sqrt(r2) / radii(0, i)).value;
     }
     out.phi[k] = w;
     sum += w;
