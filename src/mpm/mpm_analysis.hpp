@@ -137,6 +137,8 @@ class MpmAnalysis : public Analysis {
   Index newton_jumps_ = 0;           // sub-increments that converged on another branch (a limit point crossed)
   Real newton_first_jump_load_ = 0;  // the load factor before the first of them; 0 = none
   Real newton_largest_gap_ = 0;      // largest share of a sub-increment's work not stored, 0 if none (diagnostic)
+  Real newton_last_rate_ = 0;        // largest nodal displacement per unit load factor of the last accepted
+                                     // sub-increment; 0 = none since the start or the last stop
   std::array<Real, 3> newton_time_{};  // seconds: forces, tangent, linear solve
 
   /// The ordered stages of one step (core/step_stage.hpp); mass_scaled adds the fictitious-mass stage

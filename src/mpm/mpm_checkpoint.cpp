@@ -55,6 +55,7 @@ void MpmAnalysis::state_fields(Self& self, Archive& a) {
     a.field("mpm.newton.jumps", self.newton_jumps_);
     a.field("mpm.newton.first_jump_load", self.newton_first_jump_load_);
     a.field("mpm.newton.largest_energy_gap", self.newton_largest_gap_);
+    a.field("mpm.newton.last_rate", self.newton_last_rate_);
   }
   if (self.scaled_) {  // mass-scaled quasi-static: the fictitious masses and the damping estimate's state
     a.field("mpm.mass_scaling.mass", self.dyn_mass_);

@@ -30,7 +30,8 @@ constexpr int kMaxIterations = 15;             // per sub-increment (then the su
 constexpr int kMaxHalvings = 12;               // a level in at most 2^12 sub-increments
 constexpr Real kMaxRotation = 0.15;            // rad per sub-increment at any node
 constexpr Real kMaxCorrectionRotation = 0.1;   // rad per Newton correction at any node
-constexpr Real kJumpEnergyGap = 0.25;          // share of a sub-increment's work not stored: a jump
+constexpr Real kJumpEnergyGap = 0.25;          // share of a sub-increment's work not stored ...
+constexpr Real kJumpRateRatio = 3.0;           // ... and displacement per unit load 3 x the last one's: a jump
 }  // namespace
 
 std::pair<Real, Real> MpmAnalysis::weighted_residual(const Eigen::Matrix3Xd& f_int, const Eigen::Matrix3Xd& m_int) const {
@@ -145,12 +146,15 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
                 (0.5 * (m_ext_.col(i) + m_ext_start.col(i))).dot(theta.col(i));
       // A static path under load control is continuous: the sub-increment's external work and the energy
       // it stored agree to second order. Newton converging on another branch across a limit point (a
-      // snap-through without its dynamics) leaves a gap of the order of the work itself: such a
-      // sub-increment is refused and halved, so Newton closes in on the limit point, stops there, and the
-      // snap is left to explicit dynamics.
+      // snap-through without its dynamics) leaves a gap of the order of the work itself, and a jump in the
+      // displacement per unit load. A stiffening path (a membrane taking up a transverse load, u ~ P^(1/3))
+      // also leaves a trapezoidal-rule gap, but its displacement per unit load falls: so both are asked
+      // for. Such a sub-increment is refused and halved, so Newton closes in on the limit point, stops
+      // there, and the snap is left to explicit dynamics.
       const Real stored = done.internal_work + done.hourglass_work;
       const Real gap = (work - stored) / std::max({std::abs(work), std::abs(stored), std::numeric_limits<Real>::min()});
-      if (gap > kJumpEnergyGap) {
+      const Real rate = u.cwiseAbs().maxCoeff() / (target - reached);
+      if (gap > kJumpEnergyGap && newton_last_rate_ > 0 && rate > kJumpRateRatio * newton_last_rate_) {
         if (newton_jumps_++ == 0) newton_first_jump_load_ = reached;
         failure = fmt::format("between load factors {:.6g} and {:.6g} it converges only on another branch, {:.0f} % of "
                               "the work into no stored energy: a limit point",
@@ -160,6 +164,7 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
         continue;
       }
       newton_largest_gap_ = std::max(newton_largest_gap_, gap);
+      newton_last_rate_ = rate;
       energy_.internal += done.internal_work;
       energy_.hourglass += done.hourglass_work;
       energy_.external += work;
@@ -196,6 +201,7 @@ bool MpmAnalysis::solve_level_newton(Real from, Real to, OutputSink& sink) {
   }
   if (newton_stopped_levels_++ == 0) newton_first_stop_load_ = reached;
   newton_step_ = 0;
+  newton_last_rate_ = 0;
   sink.notice(fmt::format("Newton stopped at load factor {:.6g} ({}); the level to {:.6g} goes on by explicit dynamics",
                           reached, failure, to));
   locate_grid();

@@ -311,6 +311,40 @@ probes:
 // P / P_max ~ 0.742, W_C ~ -10.4 to -11.3; after the snap W_C ~ -27). On this coarse quarter Newton
 // converges on the far branch; the sub-increment that jumped stores far less energy than the work done
 // on it, which is reported (newton_jumps, newton_first_jump_load just below the limit).
+// A stiffening path is no jump: a thin clamped plate under pressure takes the load as a membrane
+// (w ~ p^(1/3)), so one increment from the flat plate leaves a large trapezoidal-rule energy gap, but its
+// displacement per unit load falls; Newton takes it whole, and the elastic answer does not depend on the
+// number of levels.
+TEST(mpm_Cases, NewtonTakesAStiffeningMembranePathWithoutJumps) {
+  const std::string yaml = R"(
+title: thin clamped plate under pressure
+method: mpm
+materials: [{name: p, model: linear_elastic, E: 1.0e6, nu: 0.3, density: 1.0}]
+geometry: {type: plate, min: [0, 0], max: [1, 1], thickness: 0.002}
+discretization: {elements: [8, 8]}
+boundary:
+  - {select: {set: xmin}, fix: [x, y, z, rx, ry, rz]}
+  - {select: {set: xmax}, fix: [x, y, z, rx, ry, rz]}
+  - {select: {set: ymin}, fix: [x, y, z, rx, ry, rz]}
+  - {select: {set: ymax}, fix: [x, y, z, rx, ry, rz]}
+loads: [{select: all, pressure: 1.0}]
+mpm: {load_levels: 1}
+probes: [{name: w_c, field: displacement, component: z, at: [0.5, 0.5, 0]}]
+output: {vtu: false}
+)";
+  const Outcome one = run_case("membrane_one", yaml);
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_EQ(summary_value("membrane_one", "newton_jumps"), 0.0);
+  EXPECT_EQ(summary_value("membrane_one", "newton_stopped_levels"), 0.0);
+  EXPECT_GT(summary_value("membrane_one", "newton_largest_energy_gap"), 0.25);  // the trapezoidal gap is there
+  const double w_one = summary_value("membrane_one", "w_c");
+  EXPECT_LT(w_one, -5 * 0.002);  // a membrane: deflection several thicknesses
+  const Outcome ten = run_case("membrane_ten", yaml, "--set mpm.load_levels=10");
+  ASSERT_EQ(ten.exit_code, 0) << ten.output;
+  EXPECT_EQ(summary_value("membrane_ten", "newton_jumps"), 0.0);
+  EXPECT_NEAR(summary_value("membrane_ten", "w_c"), w_one, 0.005 * std::abs(w_one));
+}
+
 TEST(mpm_Cases, NewtonRefusesAJumpAcrossALimitPoint) {
   const std::string yaml = R"(
 title: hinged roof
