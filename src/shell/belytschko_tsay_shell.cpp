@@ -209,7 +209,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
   const Row4 tz = wl.row(2);
   const HourglassRates hg = section_.hourglass_model == HourglassModel::physical
-                                ? physical_hourglass(xh, yh, b1, b2, h, area,
+                                ? physical_hourglass(xh, yh, zh, b1, b2, h, area,
                                                      weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
                                                      weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
@@ -257,6 +257,21 @@ Eigen::Matrix<Real, 1, 4> hourglass_gamma(const Eigen::Matrix<Real, 1, 4>& xh, c
 
 }  // namespace
 
+BelytschkoTsayShell::CornerNormals BelytschkoTsayShell::corner_normals(const Row4& xh, const Row4& yh, const Row4& zh) {
+  const Real xi[4] = {-1.0, 1.0, 1.0, -1.0}, eta[4] = {-1.0, -1.0, 1.0, 1.0};
+  CornerNormals n;
+  for (int k = 0; k < 4; ++k) {  // a_xi x a_eta of x(xi, eta) = sum_J N_J(xi, eta) x_J at corner k
+    Vec3 a_xi = Vec3::Zero(), a_eta = Vec3::Zero();
+    for (int j = 0; j < 4; ++j) {
+      const Vec3 xj(xh(j), yh(j), zh(j));
+      a_xi += 0.25 * xi[j] * (1.0 + eta[j] * eta[k]) * xj;
+      a_eta += 0.25 * eta[j] * (1.0 + xi[j] * xi[k]) * xj;
+    }
+    n.col(k) = a_xi.cross(a_eta).normalized();
+  }
+  return n;
+}
+
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(const Row4& xh, const Row4& yh,
                                                                                const Row4& b1, const Row4& b2, Real h,
                                                                                Real area) const {
@@ -301,7 +316,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
   return out;
 }
 
-BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh,
+BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh,
                                                                             const Row4& b1, const Row4& b2, Real h,
                                                                             Real area, Real tangent_membrane,
                                                                             Real tangent_bending) const {
@@ -317,24 +332,39 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   out.vx[3] = gamma;
   out.vy[4] = gamma;
   const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
-  // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin) edge-tied shears. Covariant shear at
-  // the midpoint of edge (I, J): g = [(w_J - w_I) + dx theta_y_avg - dy theta_x_avg] / 2; gamma_xi varies
-  // linearly in eta between edges 0-1 and 3-2, gamma_eta in xi between 0-3 and 1-2. Their differences
-  // D_xi, D_eta carry (1/2) k G t (A / 3) |J^-T e|^2 D^2 of energy (zero for rigid motions and for the
-  // Kirchhoff twist w = c x y; MITC4's shear energy exactly on parallelograms with the centre term below).
+  // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin 1985) edge-tied shears. Covariant
+  // shear at the midpoint of edge (I, J), with the bilinear surface's normal n_K at each corner as the
+  // director: g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2,
+  // E = x_J - x_I (on a flat facet n_K = e3 and g = [(w_J - w_I) + dx theta_y_avg - dy theta_x_avg] / 2).
+  // gamma_xi varies linearly in eta between edges 0-1 and 3-2, gamma_eta in xi between 0-3 and 1-2.
+  // Their differences D_xi, D_eta carry (1/2) k G t (A / 3) |J^-T e|^2 D^2 of energy: zero for rigid
+  // motions and for the Kirchhoff twist w = c x y, on warped facets too (with e3 as every corner's
+  // director the twist of a warped facet gave D of order twist x warp, which locked the thin twisted
+  // beam); MITC4's shear energy exactly on parallelograms with the centre term below.
+  const CornerNormals n = corner_normals(xh, yh, zh);
   auto add_edge = [&](int slot, int i, int j, Real s) {
-    const Real dxe = xh(j) - xh(i), dye = yh(j) - yh(i);
-    out.vz[slot](j) += 0.5 * s;
-    out.vz[slot](i) -= 0.5 * s;
-    out.ty[slot](i) += 0.25 * s * dxe;
-    out.ty[slot](j) += 0.25 * s * dxe;
-    out.tx[slot](i) -= 0.25 * s * dye;
-    out.tx[slot](j) -= 0.25 * s * dye;
+    const Vec3 d = 0.5 * (n.col(i) + n.col(j));
+    const Vec3 e(xh(j) - xh(i), yh(j) - yh(i), zh(j) - zh(i));
+    out.vx[slot](j) += 0.5 * s * d(0);
+    out.vx[slot](i) -= 0.5 * s * d(0);
+    out.vy[slot](j) += 0.5 * s * d(1);
+    out.vy[slot](i) -= 0.5 * s * d(1);
+    out.vz[slot](j) += 0.5 * s * d(2);
+    out.vz[slot](i) -= 0.5 * s * d(2);
+    for (int k : {i, j}) {
+      const Vec3 c = n.col(k).cross(e);
+      out.tx[slot](k) += 0.25 * s * c(0);
+      out.ty[slot](k) += 0.25 * s * c(1);
+      out.tz[slot](k) += 0.25 * s * c(2);
+    }
   };
   add_edge(2, 3, 2, 0.5);
   add_edge(2, 0, 1, -0.5);
   add_edge(5, 1, 2, 0.5);
   add_edge(5, 0, 3, -0.5);
+  // the velocities above are the raw ones: the rows act on the warping-corrected v_x = raw + (b1 . v_z) z,
+  // v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
+  for (int slot : {2, 5}) out.vz[slot] -= out.vx[slot].dot(zh) * b1 + out.vy[slot].dot(zh) * b2;
   Row4 xi, eta;
   xi << -1.0, 1.0, 1.0, -1.0;
   eta << -1.0, -1.0, 1.0, 1.0;
@@ -343,7 +373,15 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   const Eigen::Matrix<Real, 2, 2> jinv = jac.inverse();
   const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
   const Real shear = k * G * h * area / 3.0;
-  // drilling: theta_z (mean) - omega_z, omega_z = (b1 . v_y - b2 . v_x) / 2
+  // drilling: theta_z (mean) - omega_z, omega_z = (b1 . v'_y - b2 . v'_x) / 2 the in-plane spin of the
+  // facet. On a warped facet v' are the nodes' velocities less the motion of their offset z_I from the
+  // facet by the node's own rotation, v'_x = v_x - theta_y z_I, v'_y = v_y + theta_x z_I (raw velocities;
+  // the rows below act on the warping-corrected v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z), so
+  // that a Kirchhoff bending field of the warped surface gives no drilling strain. The rigid-rotation
+  // correction alone left one of order curvature x warp, which a stiff penalty turned into locking
+  out.tx[6] = -0.5 * b1.cwiseProduct(zh);
+  out.ty[6] = -0.5 * b2.cwiseProduct(zh);
+  out.vz[6] = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
   out.tz[6] = Row4::Constant(0.25);
   out.vy[6] = -0.5 * b1;
   out.vx[6] = 0.5 * b2;

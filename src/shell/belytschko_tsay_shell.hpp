@@ -132,10 +132,14 @@ class BelytschkoTsayShell {
         for (auto& r : *rows) r.setZero();
     }
   };
+  /// Unit normals of the element's bilinear surface x(xi, eta) at its corners (local frame, columns);
+  /// all e3 on a flat element.
+  using CornerNormals = Eigen::Matrix<Real, 3, 4>;
+  static CornerNormals corner_normals(const Row4& xh, const Row4& yh, const Row4& zh);
   HourglassRates coefficient_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
                                        Real area) const;
   /// tangent_membrane / tangent_bending: the material's current stiffness ratio (1 = elastic).
-  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
+  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, const Row4& b1, const Row4& b2, Real h,
                                     Real area, Real tangent_membrane, Real tangent_bending) const;
 
   ShellSection section_;
