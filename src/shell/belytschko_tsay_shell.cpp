@@ -209,7 +209,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
   const Row4 tz = wl.row(2);
   const HourglassRates hg = section_.hourglass_model == HourglassModel::physical
-                                ? physical_hourglass(xh, yh, zh, b1, b2, h, area,
+                                ? physical_hourglass(xh, yh, zh, warped, b1, b2, h, area,
                                                      weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
                                                      weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
@@ -317,6 +317,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
 }
 
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh,
+                                                                            bool corrected,
                                                                             const Row4& b1, const Row4& b2, Real h,
                                                                             Real area, Real tangent_membrane,
                                                                             Real tangent_bending) const {
@@ -362,9 +363,10 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   add_edge(2, 0, 1, -0.5);
   add_edge(5, 1, 2, 0.5);
   add_edge(5, 0, 3, -0.5);
-  // the velocities above are the raw ones: the rows act on the warping-corrected v_x = raw + (b1 . v_z) z,
-  // v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
-  for (int slot : {2, 5}) out.vz[slot] -= out.vx[slot].dot(zh) * b1 + out.vy[slot].dot(zh) * b2;
+  // the velocities above are the raw ones: with the warping correction the rows act on the corrected
+  // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
+  if (corrected)
+    for (int slot : {2, 5}) out.vz[slot] -= out.vx[slot].dot(zh) * b1 + out.vy[slot].dot(zh) * b2;
   Row4 xi, eta;
   xi << -1.0, 1.0, 1.0, -1.0;
   eta << -1.0, -1.0, 1.0, 1.0;
@@ -376,12 +378,13 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // drilling: theta_z (mean) - omega_z, omega_z = (b1 . v'_y - b2 . v'_x) / 2 the in-plane spin of the
   // facet. On a warped facet v' are the nodes' velocities less the motion of their offset z_I from the
   // facet by the node's own rotation, v'_x = v_x - theta_y z_I, v'_y = v_y + theta_x z_I (raw velocities;
-  // the rows below act on the warping-corrected v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z), so
-  // that a Kirchhoff bending field of the warped surface gives no drilling strain. The rigid-rotation
-  // correction alone left one of order curvature x warp, which a stiff penalty turned into locking
+  // with the warping correction the rows act on the corrected v_x = raw + (b1 . v_z) z,
+  // v_y = raw + (b2 . v_z) z), so that a Kirchhoff bending field of the warped surface gives no drilling
+  // strain. The rigid-rotation correction alone left one of order curvature x warp, which a stiff
+  // penalty turned into locking
   out.tx[6] = -0.5 * b1.cwiseProduct(zh);
   out.ty[6] = -0.5 * b2.cwiseProduct(zh);
-  out.vz[6] = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
+  if (corrected) out.vz[6] = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
   out.tz[6] = Row4::Constant(0.25);
   out.vy[6] = -0.5 * b1;
   out.vx[6] = 0.5 * b2;

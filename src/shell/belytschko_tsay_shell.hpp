@@ -138,9 +138,11 @@ class BelytschkoTsayShell {
   static CornerNormals corner_normals(const Row4& xh, const Row4& yh, const Row4& zh);
   HourglassRates coefficient_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
                                        Real area) const;
-  /// tangent_membrane / tangent_bending: the material's current stiffness ratio (1 = elastic).
-  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, const Row4& b1, const Row4& b2, Real h,
-                                    Real area, Real tangent_membrane, Real tangent_bending) const;
+  /// tangent_membrane / tangent_bending: the material's current stiffness ratio (1 = elastic);
+  /// corrected: the in-plane velocities the rows act on carry the warping correction.
+  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, bool corrected, const Row4& b1,
+                                    const Row4& b2, Real h, Real area, Real tangent_membrane,
+                                    Real tangent_bending) const;
 
   ShellSection section_;
   const material::ShellMaterial& material_;
