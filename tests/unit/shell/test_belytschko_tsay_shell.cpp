@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -30,13 +31,17 @@ struct Fixture {
   Real h = 0.1;
 };
 
-/// One element update from a zero state (fresh stresses, hourglass resultants and thickness).
-ShellElementResult update_once(const Fixture& f, const NodeMatrix& x, const NodeMatrix& v, const NodeMatrix& w, Real dt) {
+/// One element update from a zero state (fresh stresses, hourglass resultants and thickness); the
+/// hourglass resultants after it go to hourglass_out if given (kHourglassSize values).
+ShellElementResult update_once(const Fixture& f, const NodeMatrix& x, const NodeMatrix& v, const NodeMatrix& w, Real dt,
+                               Real* hourglass_out = nullptr) {
   BelytschkoTsayShell shell(f.section, f.material);
   std::vector<Real> stress(shell.stress_size(), 0.0);
   Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
   Real h = f.h;
-  return shell.update(x, v, w, dt, stress.data(), hourglass, h);
+  const ShellElementResult r = shell.update(x, v, w, dt, stress.data(), hourglass, h);
+  if (hourglass_out) std::copy(hourglass, hourglass + BelytschkoTsayShell::kHourglassSize, hourglass_out);
+  return r;
 }
 
 TEST(shell_BelytschkoTsay, LobattoRulesIntegratePolynomialsExactly) {
@@ -263,11 +268,8 @@ TEST(shell_BelytschkoTsay, KirchhoffBendingOfAWarpedFacetGivesNoDrillingStrain) 
       u_x = Vec3(0, 0, X);
       u_y = Vec3::Zero();
     });
-    BelytschkoTsayShell shell(f.section, f.material);
-    std::vector<Real> stress(shell.stress_size(), 0.0);
-    Real hourglass[BelytschkoTsayShell::kHourglassSize] = {};
-    Real h = f.h;
-    const auto r = shell.update(m.x, m.v, m.omega, dt, stress.data(), hourglass, h);
+    Real hourglass[BelytschkoTsayShell::kHourglassSize];
+    const auto r = update_once(f, m.x, m.v, m.omega, dt, hourglass);
     EXPECT_TRUE(r.valid);
     const Real k_drill = f.section.drilling * f.material.shear_modulus() * f.h * r.area;
     return hourglass[6] / (dt * k_drill);  // theta_z - omega_z
