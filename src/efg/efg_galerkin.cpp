@@ -80,7 +80,9 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
 
   // pattern
   if (!lagrange)
-    for (const auto& sv : constraint_shapes) groups.push_back(sv.neighbours);
+    for (std::size_t i = 0; i < constraint_shapes.size(); ++i)  // a boundary face's points share their neighbours
+      if (i == 0 || constraint_shapes[i].neighbours != constraint_shapes[i - 1].neighbours)
+        groups.push_back(constraint_shapes[i].neighbours);
   const bool symmetric = system.symmetric = !vci;
   solve::BlockPattern pattern(n, 3, groups, symmetric);
   groups.clear();
@@ -208,18 +210,28 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       }
     }
   } else if (adds_boundary) {
-    for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
-      const auto& p = constraint_points_[i];
-      const auto& sv = constraint_shapes[i];
-      if (options.essential == EssentialMethod::nitsche && p.surface) {
-        const auto& mat = materials_[static_cast<std::size_t>(p.material)];
-        const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
-        nitsche_terms(sv, p, mat, beta, Kc, fc, pattern.symmetric());
-      } else {
-        penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
+    // consecutive points with the same neighbours (the Gauss points of one boundary cell face) add up in
+    // one dense block, scattered once: the scatter's pattern search, not the terms, was the cost
+    for (std::size_t i = 0; i < constraint_points_.size();) {
+      const auto& group = constraint_shapes[i];
+      const Index size = 3 * static_cast<Index>(group.neighbours.size());
+      Kc.setZero(size, size);
+      fc.setZero(size);
+      std::size_t j = i;
+      for (; j < constraint_points_.size() && constraint_shapes[j].neighbours == group.neighbours; ++j) {
+        const auto& p = constraint_points_[j];
+        const auto& sv = constraint_shapes[j];
+        if (options.essential == EssentialMethod::nitsche && p.surface) {
+          const auto& mat = materials_[static_cast<std::size_t>(p.material)];
+          const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
+          nitsche_terms(sv, p, mat, beta, Kc, fc, pattern.symmetric());
+        } else {
+          penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
+        }
       }
-      pattern.scatter(sv.neighbours, Kc, values);
-      scatter_vector(sv, fc, f);
+      pattern.scatter(group.neighbours, Kc, values);
+      scatter_vector(group, fc, f);
+      i = j;
     }
   }
   timings_["assembly_boundary_s"] = seconds_since(start);

@@ -19,8 +19,6 @@ Eigen::Matrix<Real, 3, Eigen::Dynamic> traction_operator(const mls::ShapeFunctio
 void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, Real alpha, Eigen::MatrixXd& K,
                    Eigen::VectorXd& f) {
   const Index m = static_cast<Index>(sv.neighbours.size());
-  K.setZero(3 * m, 3 * m);
-  f.setZero(3 * m);
   const Real s = alpha * p.weight;
   for (int a = 0; a < 3; ++a) {
     if (!p.constrained[static_cast<std::size_t>(a)]) continue;
@@ -35,8 +33,6 @@ void nitsche_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p,
                    Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f, bool upper_only) {
   const Index m = static_cast<Index>(sv.neighbours.size());
   const auto T = traction_operator(sv, material, p.normal);
-  K.setZero(3 * m, 3 * m);
-  f.setZero(3 * m);
   const Real w = p.weight;
   Eigen::VectorXd n(3 * m), v(3 * m);
   for (int a = 0; a < 3; ++a) {

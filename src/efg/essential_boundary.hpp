@@ -56,13 +56,15 @@ struct ConstraintPoint {
 Eigen::Matrix<Real, 3, Eigen::Dynamic> traction_operator(const mls::ShapeFunctionValues& sv,
                                                          const material::LinearElastic& material, const Vec3& n);
 
-/// Penalty terms of one constraint point: K += alpha w N^T S N, f += alpha w N^T S u-bar.
+/// Penalty terms of one constraint point: K += alpha w N^T S N, f += alpha w N^T S u-bar (K: 3m x 3m and
+/// f: 3m for the m neighbours of sv, sized and zeroed by the caller, so that the points of a boundary cell,
+/// which share their neighbours, add up in one block).
 void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, Real alpha, Eigen::MatrixXd& K,
                    Eigen::VectorXd& f);
 
 /// Nitsche terms of one surface point: K += w (-N^T S T - T^T S N + beta N^T S N),
-/// f += w (-T^T S u-bar + beta N^T S u-bar). upper_only: K's upper triangle only (what a symmetric
-/// BlockPattern::scatter reads).
+/// f += w (-T^T S u-bar + beta N^T S u-bar) (K and f sized and zeroed by the caller, as for penalty_terms).
+/// upper_only: K's upper triangle only (what a symmetric BlockPattern::scatter reads).
 void nitsche_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
                    Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f, bool upper_only = false);
 

@@ -26,6 +26,7 @@ std::string translate_words(const std::string& text) {
 struct Expression::Impl {
   mu::Parser parser;
   double x = 0, y = 0, z = 0, t = 0, r = 0, theta = 0;
+  bool uses_r = true, uses_theta = true;  // r and theta are computed per evaluation only when the text uses them
 
   explicit Impl(const std::string& text) {
     parser.DefineVar("x", &x);
@@ -39,6 +40,9 @@ struct Expression::Impl {
     parser.DefineInfixOprt("!", logical_not);
     parser.SetExpr(translate_words(text));
     parser.Eval();  // compile now so that errors surface at parse time
+    const auto& used = parser.GetUsedVar();
+    uses_r = used.count("r") > 0;
+    uses_theta = used.count("theta") > 0;
   }
 };
 
@@ -66,8 +70,8 @@ Real Expression::evaluate(const Vec3& point, Real time) const {
   p.y = point.y();
   p.z = point.z();
   p.t = time;
-  p.r = std::sqrt(p.x * p.x + p.y * p.y);
-  p.theta = std::atan2(p.y, p.x);
+  if (p.uses_r) p.r = std::sqrt(p.x * p.x + p.y * p.y);
+  if (p.uses_theta) p.theta = std::atan2(p.y, p.x);
   try {
     return p.parser.Eval();
   } catch (const mu::Parser::exception_type& e) {
