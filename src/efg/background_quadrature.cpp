@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -98,9 +99,108 @@ VolumeQuadrature volume_quadrature(const BackgroundCells& cells, const std::arra
 
 namespace {
 
+/// Where a selection crosses a boundary face (the selection test is evaluated at parametric points
+/// (s, t) along the face's two axes a, b).
+struct FaceSelection {
+  const BackgroundCells& cells;
+  int d, a, b, face;
+  Real u_d;
+  const std::function<bool(const Vec3&, int)>& keep;
+  const std::vector<Real>& xa;  // Gauss abscissae along a and b (on [-1, 1])
+  const std::vector<Real>& xb;
+
+  Vec3 parametric(Real s, Real t) const {
+    Vec3 u;
+    u[d] = u_d;
+    u[a] = s;
+    u[b] = t;
+    return u;
+  }
+  bool holds(Real s, Real t) const { return keep(cells.map.position(parametric(s, t)), face); }
+
+  /// Tests the rectangle [s0, s1] x [t0, t1] at its Gauss points and at a 3 x 3 grid of points set in
+  /// by kInset of its size from its edges and corners (so that a region boundary between a Gauss point
+  /// and an edge is seen); returns the number of points where the selection holds, out of `count`, and
+  /// the sum of their coordinates.
+  int sample(Real s0, Real s1, Real t0, Real t1, int& count, Real& sum_s, Real& sum_t) const {
+    constexpr Real kInset = 1e-3;
+    const Real fractions[3] = {kInset, 0.5, 1.0 - kInset};
+    int in = 0;
+    count = 0;
+    sum_s = sum_t = 0;
+    auto test = [&](Real s, Real t) {
+      ++count;
+      if (holds(s, t)) {
+        ++in;
+        sum_s += s;
+        sum_t += t;
+      }
+    };
+    for (const Real ft : fractions)
+      for (const Real fs : fractions) test(s0 + fs * (s1 - s0), t0 + ft * (t1 - t0));
+    for (const Real gt : xb)
+      for (const Real gs : xa) test(0.5 * (s0 + s1) + 0.5 * (s1 - s0) * gs, 0.5 * (t0 + t1) + 0.5 * (t1 - t0) * gt);
+    return in;
+  }
+
+  /// Whether the selection holds anywhere on a lattice over [s0, s1] x [t0, t1]: the corners of its
+  /// split x split sub-faces (those on the rectangle's edges set in by kInset of a sub-face) and their
+  /// centres. A face it misses is left out without testing every sub-face.
+  bool touches(Real s0, Real s1, Real t0, Real t1, int split) const {
+    constexpr Real kInset = 1e-3;
+    auto at = [&](Real lo, Real hi, int k, int twice_split) {
+      Real f = static_cast<Real>(k) / twice_split;
+      if (k == 0) f = kInset / split;
+      if (k == twice_split) f = 1.0 - kInset / split;
+      return lo + f * (hi - lo);
+    };
+    for (int kt = 0; kt <= 2 * split; ++kt)
+      for (int ks = 0; ks <= 2 * split; ++ks) {
+        if ((ks % 2) != (kt % 2)) continue;  // sub-face corners (even, even) and centres (odd, odd)
+        if (holds(at(s0, s1, ks, 2 * split), at(t0, t1, kt, 2 * split))) return true;
+      }
+    return false;
+  }
+
+  /// The parametric area of [s0, s1] x [t0, t1] where the selection holds, and its first moments, by
+  /// quadtree bisection of the rectangles the region boundary crosses (`depth` more levels; a crossed
+  /// rectangle of the last level counts its sampled fraction at the centroid of its selected points).
+  void selected_part(Real s0, Real s1, Real t0, Real t1, int depth, Real& area, Real& moment_s, Real& moment_t) const {
+    int count = 0;
+    Real sum_s = 0, sum_t = 0;
+    const int in = sample(s0, s1, t0, t1, count, sum_s, sum_t);
+    const Real size = (s1 - s0) * (t1 - t0);
+    if (in == 0) return;
+    if (in == count) {
+      area += size;
+      moment_s += size * 0.5 * (s0 + s1);
+      moment_t += size * 0.5 * (t0 + t1);
+      return;
+    }
+    if (depth == 0) {
+      area += size * in / count;
+      moment_s += size * sum_s / count;
+      moment_t += size * sum_t / count;
+      return;
+    }
+    const Real sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
+    selected_part(s0, sm, t0, tm, depth - 1, area, moment_s, moment_t);
+    selected_part(sm, s1, t0, tm, depth - 1, area, moment_s, moment_t);
+    selected_part(s0, sm, tm, t1, depth - 1, area, moment_s, moment_t);
+    selected_part(sm, s1, tm, t1, depth - 1, area, moment_s, moment_t);
+  }
+};
+
+/// Levels of bisection below a sub-face that a selection boundary crosses: the boundary is located to
+/// 1 / (split 2^6) of the cell (about 2e-3 of it for split 8).
+constexpr int kBoundaryDepth = 6;
+
 /// Appends the Gauss points of one boundary face (axis d, side) of a cell, optionally split into
-/// `split` x `split` sub-faces; with `keep`, only the points where keep(x, face) holds (tested before the
-/// point's Jacobian is computed).
+/// `split` x `split` sub-faces. With `keep`, a sub-face where the selection holds at every sample
+/// point (FaceSelection::sample) keeps its Gauss points, one where it holds nowhere is left out, and
+/// one that the selection's boundary crosses gets a single point at the centroid of its selected part
+/// with that part's area (FaceSelection::selected_part), so a load's resultant and its moment, and a
+/// constraint's extent, follow the region to about 1 / (split 2^6) of the cell.
 void append_face(const BackgroundCells& cells, Index c, int d, int side, const std::array<int, 3>& gauss, int split,
                  const std::array<std::vector<Real>, 3>& xi, const std::array<std::vector<Real>, 3>& wi,
                  SurfaceQuadrature& q, std::vector<Vec3>& points, std::vector<Vec3>& normals, std::vector<Real>& weights,
@@ -109,33 +209,56 @@ void append_face(const BackgroundCells& cells, Index c, int d, int side, const s
   Vec3 lo, hi;
   cells.bounds(c, lo, hi);
   const Vec3 step = kStepFraction * (hi - lo);
+  const Real u_d = side == 0 ? lo[d] : hi[d];
+  // one point of the face: parametric u, area weight in parameter space
+  auto emit = [&](const Vec3& u, const Vec3& x, Real parametric_weight) {
+    const Mat3 J = map_jacobian(cells.map, u, step);
+    const Vec3 cross = J.col(a).cross(J.col(b));
+    const Real area = cross.norm();
+    const Real scale = (J.col(a).norm() + 1e-300) * (J.col(b).norm() + 1e-300);
+    if (!(area > 1e-12 * scale)) return;  // degenerate face (collapsed axis): no area
+    Vec3 normal = cross / area;
+    const Real orientation = normal.dot(J.col(d));
+    if ((side == 1 && orientation < 0) || (side == 0 && orientation > 0)) normal = -normal;
+    points.push_back(x);
+    normals.push_back(normal);
+    weights.push_back(parametric_weight * area);
+    sizes.push_back(J.col(d).norm() * (hi[d] - lo[d]));
+    q.face.push_back(2 * d + side);
+    q.cell.push_back(c);
+  };
+  std::unique_ptr<FaceSelection> selection;
+  if (keep) {
+    selection = std::make_unique<FaceSelection>(FaceSelection{cells, d, a, b, 2 * d + side, u_d, *keep, xi[a], xi[b]});
+    if (!selection->touches(lo[a], hi[a], lo[b], hi[b], split)) return;
+  }
   for (int sb = 0; sb < split; ++sb)
     for (int sa = 0; sa < split; ++sa) {
       const Real a0 = lo[a] + (hi[a] - lo[a]) * sa / split, a1 = lo[a] + (hi[a] - lo[a]) * (sa + 1) / split;
       const Real b0 = lo[b] + (hi[b] - lo[b]) * sb / split, b1 = lo[b] + (hi[b] - lo[b]) * (sb + 1) / split;
       const Real ma = 0.5 * (a0 + a1), ha = 0.5 * (a1 - a0), mb = 0.5 * (b0 + b1), hb = 0.5 * (b1 - b0);
+      if (selection) {
+        int count = 0;
+        Real sum_s = 0, sum_t = 0;
+        const int in = selection->sample(a0, a1, b0, b1, count, sum_s, sum_t);
+        if (in == 0) continue;
+        if (in < count) {  // the region's boundary crosses this sub-face
+          Real area = 0, moment_s = 0, moment_t = 0;
+          selection->selected_part(a0, a1, b0, b1, kBoundaryDepth, area, moment_s, moment_t);
+          if (area > 0) {
+            const Vec3 u = selection->parametric(moment_s / area, moment_t / area);
+            emit(u, cells.map.position(u), area);
+          }
+          continue;
+        }
+      }
       for (int kb = 0; kb < gauss[b]; ++kb)
         for (int ka = 0; ka < gauss[a]; ++ka) {
           Vec3 u;
-          u[d] = side == 0 ? lo[d] : hi[d];
+          u[d] = u_d;
           u[a] = ma + ha * xi[a][ka];
           u[b] = mb + hb * xi[b][kb];
-          const Vec3 x = cells.map.position(u);
-          if (keep && !(*keep)(x, 2 * d + side)) continue;
-          const Mat3 J = map_jacobian(cells.map, u, step);
-          const Vec3 cross = J.col(a).cross(J.col(b));
-          const Real area = cross.norm();
-          const Real scale = (J.col(a).norm() + 1e-300) * (J.col(b).norm() + 1e-300);
-          if (!(area > 1e-12 * scale)) continue;  // degenerate face (collapsed axis): no area
-          Vec3 normal = cross / area;
-          const Real orientation = normal.dot(J.col(d));
-          if ((side == 1 && orientation < 0) || (side == 0 && orientation > 0)) normal = -normal;
-          points.push_back(x);
-          normals.push_back(normal);
-          weights.push_back(wi[a][ka] * wi[b][kb] * ha * hb * area);
-          sizes.push_back(J.col(d).norm() * (hi[d] - lo[d]));
-          q.face.push_back(2 * d + side);
-          q.cell.push_back(c);
+          emit(u, cells.map.position(u), wi[a][ka] * wi[b][kb] * ha * hb);
         }
     }
 }
@@ -201,10 +324,21 @@ SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const Surf
     for (Index i = s; i < e; ++i) hits += selected(base.points.col(i), base.face[static_cast<std::size_t>(i)]) ? 1 : 0;
     const int face = base.face[static_cast<std::size_t>(s)];
     const Index c = base.cell[static_cast<std::size_t>(s)];
-    // candidates for a partial selection: faces with some hits, or whose neighbours on the
-    // refined grid might hit (test the refined points of every face that is not fully selected)
-    const bool all = hits == e - s;
-    append_face(cells, c, face / 2, face % 2, gauss, all ? 1 : split, xi, wi, q, points, normals, weights, sizes, &selected);
+    // A face where the selection holds at every base point and at the face's own sample points (set in
+    // from its edges and corners) is taken whole; every other face is split and tested sub-face by
+    // sub-face (a region smaller than a cell may hold at none of the base points).
+    bool all = hits == e - s;
+    if (all) {
+      const int d = face / 2, a = (d + 1) % 3, b = (d + 2) % 3;
+      Vec3 lo, hi;
+      cells.bounds(c, lo, hi);
+      const FaceSelection whole{cells, d, a, b, face, face % 2 == 0 ? lo[d] : hi[d], selected, xi[a], xi[b]};
+      int count = 0;
+      Real sum_s = 0, sum_t = 0;
+      all = whole.sample(lo[a], hi[a], lo[b], hi[b], count, sum_s, sum_t) == count;
+    }
+    append_face(cells, c, face / 2, face % 2, gauss, all ? 1 : split, xi, wi, q, points, normals, weights, sizes,
+                all ? nullptr : &selected);
     s = e;
   }
   return finish(std::move(q), points, normals, weights, sizes);

@@ -66,9 +66,12 @@ VolumeQuadrature volume_quadrature(const BackgroundCells& cells, const std::arra
 SurfaceQuadrature boundary_quadrature(const BackgroundCells& cells, const std::array<int, 3>& gauss);
 
 /// The part of the boundary where `selected(x, face)` holds, for loads and constraints on part of a
-/// face: faces where the selection holds at every point of `base` keep their points; every other
-/// face is split into split x split sub-faces with the same Gauss rule and keeps the points where
-/// the selection holds (so a region boundary inside a cell is resolved to 1/split of the cell).
+/// face: faces where the selection holds at every point of `base` (and at points set in from the face's
+/// edges and corners) keep their points; every other face is split into split x split sub-faces with the
+/// same Gauss rule. A sub-face inside the region keeps its Gauss points; one that the region's boundary
+/// crosses is bisected 6 more levels to find the selected part's area and centroid, where it gets one
+/// point (so a load's resultant and its moment follow the region to about 1 / (split 2^6) of the cell,
+/// whatever the node spacing).
 SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
                                         const std::array<int, 3>& gauss, int split,
                                         const std::function<bool(const Vec3&, int)>& selected);

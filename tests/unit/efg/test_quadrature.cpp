@@ -152,5 +152,49 @@ TEST(BoundaryQuadrature, RefinedSelectionResolvesAPatchInsideACell) {
   EXPECT_GT(std::abs(coarse - 0.25), 0.01);
 }
 
+TEST(BoundaryQuadrature, ARegionBoundaryOffTheSubFaceGridKeepsTheAreaAndTheCentroid) {
+  // 9 x 9 nodes on the R1a quarter plate: cells 1.25 wide, so the patch edge x = 9.5 lies inside a
+  // sub-face (between its Gauss points and its edge); with the 8 x 8 sub-faces alone the patch came
+  // out 12 % small (the R1a load 87.9 instead of 100)
+  geometry::GeometrySpec g;
+  g.type = geometry::GeometryType::box;
+  g.min = Vec3(0, 0, 0);
+  g.max = Vec3(10, 10, 1);
+  const BackgroundCells c = make_background_cells(geometry::make_volume_map(g), {8, 8, 3});
+  const SurfaceQuadrature s = boundary_quadrature(c, {2, 2, 2});
+  auto patch = [](const Vec3& x, int face) { return face == 5 && x[0] > 9.5 && x[1] > 9.5; };
+  const SurfaceQuadrature part = refine_selected_faces(c, s, {2, 2, 2}, 8, patch);
+  const Real area = part.weights.sum();
+  EXPECT_NEAR(area, 0.25, 1e-3 * 0.25);
+  Vec3 moment = Vec3::Zero();
+  for (Index i = 0; i < part.size(); ++i) moment += part.weights[i] * part.points.col(i);
+  EXPECT_NEAR(moment[0] / area, 9.75, 1e-3);
+  EXPECT_NEAR(moment[1] / area, 9.75, 1e-3);
+  // a disc of radius 0.7 around (3.1, 4.3), inside four cells and crossing their edges: area pi r^2, centroid
+  const Vec3 centre(3.1, 4.3, 1.0);
+  auto disc = [&](const Vec3& x, int face) { return face == 5 && (x - centre).head<2>().norm() < 0.7; };
+  const SurfaceQuadrature round = refine_selected_faces(c, s, {2, 2, 2}, 8, disc);
+  const Real disc_area = round.weights.sum();
+  EXPECT_NEAR(disc_area, std::numbers::pi * 0.49, 2e-3 * std::numbers::pi * 0.49);
+  Vec3 disc_moment = Vec3::Zero();
+  for (Index i = 0; i < round.size(); ++i) disc_moment += round.weights[i] * round.points.col(i);
+  EXPECT_NEAR(disc_moment[0] / disc_area, 3.1, 1e-3);
+  EXPECT_NEAR(disc_moment[1] / disc_area, 4.3, 1e-3);
+}
+
+TEST(BoundaryQuadrature, ASelectionOfAnAdjacentFacePlaneAddsNothingAlongTheSharedEdge) {
+  // "x < 1e-9" holds on the face x = 0 and along the top face's edge x = 0: the top face gets no points
+  geometry::GeometrySpec g;
+  g.type = geometry::GeometryType::box;
+  g.min = Vec3(0, 0, 0);
+  g.max = Vec3(10, 10, 1);
+  const BackgroundCells c = make_background_cells(geometry::make_volume_map(g), {10, 10, 3});
+  const SurfaceQuadrature s = boundary_quadrature(c, {2, 2, 2});
+  auto clamp = [](const Vec3& x, int) { return x[0] < 1e-9; };
+  const SurfaceQuadrature part = refine_selected_faces(c, s, {2, 2, 2}, 8, clamp);
+  EXPECT_NEAR(part.weights.sum(), 10.0, 1e-10);
+  for (Index i = 0; i < part.size(); ++i) EXPECT_EQ(part.face[static_cast<std::size_t>(i)], 0);
+}
+
 }  // namespace
 }  // namespace lamina::efg
