@@ -170,10 +170,15 @@ def run_calculix(outer, inner, layers, threads, workdir):
 
 
 def run_sequence(label, sequence, runner):
-    """Runs every member of a refinement sequence (coarse to fine); returns [(params, result, error)]."""
+    """Runs every member of a refinement sequence (coarse to fine); returns [(params, result, error)].
+    A member that takes under a second runs three times and its shortest wall time counts (the results
+    are deterministic; single sub-second runs vary by 10-30 % here, for both codes alike)."""
     rows = []
     for params in sequence:
         r = runner(params)
+        if r["wall_s"] < 1.0:
+            for _ in range(2):
+                r["wall_s"] = min(r["wall_s"], runner(params)["wall_s"])
         err = abs(r["w"] / REFERENCE - 1.0)
         print(f"  {label} {params}: dofs {r['dofs']}, w = {r['w']:.5f}, error {100 * err:.3f} %, "
               f"wall {r['wall_s']:.2f} s, peak {r['rss_mib']:.0f} MiB", flush=True)
@@ -225,9 +230,12 @@ def main():
                       (f"{tag}_error_percent", error, "%")]
 
     print(f"2. time to 1 % and to 0.2 % accuracy on {args.threads} thread(s) (reference {REFERENCE})", flush=True)
-    # refinement sequences, coarse to fine (dofs increasing); lamina with 3-5 node layers through the thickness
-    lamina_sequence = [(11, 11, 3), (11, 11, 4), (16, 16, 4), (21, 21, 4), (21, 21, 5), (31, 31, 5), (41, 41, 5)]
-    ccx_sequence = [(2, 1, 1), (4, 1, 1), (6, 1, 1), (8, 2, 2), (12, 2, 2), (16, 3, 3), (24, 4, 3)]
+    # refinement sequences, coarse to fine (dofs increasing), each an in-plane refinement at a through-thickness
+    # resolution that is not the limit: lamina 4 node layers (3 layers stop at -1.2 %: 11 x 11 x 3 -1.23 %,
+    # 13 x 13 x 3 -1.16 %), then 5; CalculiX 2 C3D20R layers (1 layer stops at -1.8 %: 8 x 2 x 1), then 3
+    lamina_sequence = [(5, 5, 4), (6, 6, 4), (7, 7, 4), (9, 9, 4), (11, 11, 4), (16, 16, 4), (21, 21, 4), (21, 21, 5),
+                       (31, 31, 5), (41, 41, 5)]
+    ccx_sequence = [(2, 1, 2), (4, 1, 2), (6, 1, 2), (8, 1, 2), (8, 2, 2), (12, 2, 2), (16, 3, 3), (24, 4, 3)]
     lamina_rows = run_sequence("lamina", lamina_sequence, lambda p: run_lamina(args.lamina, p, args.threads, workdir))
     ccx_rows = run_sequence("ccx", ccx_sequence, lambda p: run_calculix(p[0], p[1], p[2], args.threads, workdir))
     for tolerance, tag in ((0.01, "1pct"), (0.002, "0p2pct")):
