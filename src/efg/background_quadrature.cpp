@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <functional>
-#include <memory>
 #include <numbers>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -102,6 +102,9 @@ namespace {
 /// Where a selection crosses a boundary face (the selection test is evaluated at parametric points
 /// (s, t) along the face's two axes a, b).
 struct FaceSelection {
+  /// Sample points nearest a rectangle's edges are set in by this fraction of its size (a selection of the
+  /// adjacent face's plane, such as x < 1e-9, holds on the shared edge itself).
+  static constexpr Real kInset = 1e-3;
   const BackgroundCells& cells;
   int d, a, b, face;
   Real u_d;
@@ -123,7 +126,6 @@ struct FaceSelection {
   /// and an edge is seen); returns the number of points where the selection holds, out of `count`, and
   /// the sum of their coordinates.
   int sample(Real s0, Real s1, Real t0, Real t1, int& count, Real& sum_s, Real& sum_t) const {
-    constexpr Real kInset = 1e-3;
     const Real fractions[3] = {kInset, 0.5, 1.0 - kInset};
     int in = 0;
     count = 0;
@@ -147,7 +149,6 @@ struct FaceSelection {
   /// split x split sub-faces (those on the rectangle's edges set in by kInset of a sub-face) and their
   /// centres. A face it misses is left out without testing every sub-face.
   bool touches(Real s0, Real s1, Real t0, Real t1, int split) const {
-    constexpr Real kInset = 1e-3;
     auto at = [&](Real lo, Real hi, int k, int twice_split) {
       Real f = static_cast<Real>(k) / twice_split;
       if (k == 0) f = kInset / split;
@@ -227,9 +228,9 @@ void append_face(const BackgroundCells& cells, Index c, int d, int side, const s
     q.face.push_back(2 * d + side);
     q.cell.push_back(c);
   };
-  std::unique_ptr<FaceSelection> selection;
+  std::optional<FaceSelection> selection;
   if (keep) {
-    selection = std::make_unique<FaceSelection>(FaceSelection{cells, d, a, b, 2 * d + side, u_d, *keep, xi[a], xi[b]});
+    selection.emplace(FaceSelection{cells, d, a, b, 2 * d + side, u_d, *keep, xi[a], xi[b]});
     if (!selection->touches(lo[a], hi[a], lo[b], hi[b], split)) return;
   }
   for (int sb = 0; sb < split; ++sb)
