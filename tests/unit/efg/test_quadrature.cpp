@@ -135,11 +135,17 @@ TEST(BoundaryQuadrature, AreaAndClosedSurfaceOfTheCurvedBeam) {
   }
 }
 
-TEST(BoundaryQuadrature, RefinedSelectionResolvesAPatchInsideACell) {
+/// The R1a quarter plate [0, 10] x [0, 10] x [0, 1] (validation/efg_clamped_plate).
+geometry::GeometrySpec quarter_plate_spec() {
   geometry::GeometrySpec g;
   g.type = geometry::GeometryType::box;
   g.min = Vec3(0, 0, 0);
   g.max = Vec3(10, 10, 1);
+  return g;
+}
+
+TEST(BoundaryQuadrature, RefinedSelectionResolvesAPatchInsideACell) {
+  const geometry::GeometrySpec g = quarter_plate_spec();
   const BackgroundCells c = make_background_cells(geometry::make_volume_map(g), {10, 10, 2});
   const SurfaceQuadrature s = boundary_quadrature(c, {3, 3, 3});
   auto patch = [](const Vec3& x, int face) { return face == 5 && x[0] > 9.5 && x[1] > 9.5; };
@@ -156,10 +162,7 @@ TEST(BoundaryQuadrature, ARegionBoundaryOffTheSubFaceGridKeepsTheAreaAndTheCentr
   // 9 x 9 nodes on the R1a quarter plate: cells 1.25 wide, so the patch edge x = 9.5 lies inside a
   // sub-face (between its Gauss points and its edge); with the 8 x 8 sub-faces alone the patch came
   // out 12 % small (the R1a load 87.9 instead of 100)
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::box;
-  g.min = Vec3(0, 0, 0);
-  g.max = Vec3(10, 10, 1);
+  const geometry::GeometrySpec g = quarter_plate_spec();
   const BackgroundCells c = make_background_cells(geometry::make_volume_map(g), {8, 8, 3});
   const SurfaceQuadrature s = boundary_quadrature(c, {2, 2, 2});
   auto patch = [](const Vec3& x, int face) { return face == 5 && x[0] > 9.5 && x[1] > 9.5; };
@@ -184,10 +187,7 @@ TEST(BoundaryQuadrature, ARegionBoundaryOffTheSubFaceGridKeepsTheAreaAndTheCentr
 
 TEST(BoundaryQuadrature, ASelectionOfAnAdjacentFacePlaneAddsNothingAlongTheSharedEdge) {
   // "x < 1e-9" holds on the face x = 0 and along the top face's edge x = 0: the top face gets no points
-  geometry::GeometrySpec g;
-  g.type = geometry::GeometryType::box;
-  g.min = Vec3(0, 0, 0);
-  g.max = Vec3(10, 10, 1);
+  const geometry::GeometrySpec g = quarter_plate_spec();
   const BackgroundCells c = make_background_cells(geometry::make_volume_map(g), {10, 10, 3});
   const SurfaceQuadrature s = boundary_quadrature(c, {2, 2, 2});
   auto clamp = [](const Vec3& x, int) { return x[0] < 1e-9; };
