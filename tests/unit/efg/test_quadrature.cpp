@@ -185,6 +185,18 @@ TEST(BoundaryQuadrature, ARegionBoundaryOffTheSubFaceGridKeepsTheAreaAndTheCentr
   EXPECT_NEAR(disc_moment[1] / disc_area, 4.3, 1e-3);
 }
 
+TEST(BoundaryQuadrature, APartOfACurvedFaceKeepsItsArea) {
+  // the curved beam's outer face (r = 5, 90 degrees, z in [-1, 1]) where the polar angle is below 0.3 rad
+  // and z above 0.37: an angle and a height that fall inside cells of the 4 x 20 x 2 background
+  const BackgroundCells c = make_background_cells(geometry::make_volume_map(curved_beam_spec()), {4, 20, 2});
+  const SurfaceQuadrature s = boundary_quadrature(c, {2, 2, 2});
+  auto part = [](const Vec3& x, int) { return std::hypot(x[0], x[1]) > 5 - 1e-9 && std::atan2(x[1], x[0]) < 0.3 && x[2] > 0.37; };
+  const SurfaceQuadrature selected = refine_selected_faces(c, s, {2, 2, 2}, 8, part);
+  const Real area = 5 * 0.3 * (1 - 0.37);
+  EXPECT_NEAR(selected.weights.sum(), area, 2e-3 * area);
+  for (Index i = 0; i < selected.size(); ++i) EXPECT_NEAR(std::hypot(selected.points(0, i), selected.points(1, i)), 5.0, 1e-9);
+}
+
 TEST(BoundaryQuadrature, ASelectionOfAnAdjacentFacePlaneAddsNothingAlongTheSharedEdge) {
   // "x < 1e-9" holds on the face x = 0 and along the top face's edge x = 0: the top face gets no points
   const geometry::GeometrySpec g = quarter_plate_spec();
