@@ -110,10 +110,18 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     const Eigen::Map<const Eigen::VectorXd> fi(internal_force_.data(), 3 * n), fe(external_force_.data(), 3 * n);
     acceleration = ((fi + fe).array() / mass.array()).matrix() - options.damping * v;
   };
-  auto support_force = [&]() {  // external generalized force: loads on free dofs, support forces on prescribed ones
+  // External generalized force: the loads on free dofs; on prescribed ones the support force that moves the
+  // node as prescribed, R = m a - f_int - f_ext, with a the prescribed motion's acceleration over the last
+  // step (v_start: the velocities at its start; none at t = 0). Before, `acceleration` there was the
+  // free-body one, (f_int + f_ext) / m, so R was ~0 and a run driven by prescribed displacements reported
+  // no external work (an energy error of 1e17 on validation/pd_plate_tension run explicitly).
+  auto support_force = [&](const Eigen::VectorXd* v_start) {
     PointMatrix g = external_force_;
     for (Index d = 0; d < 3 * n; ++d)
-      if (!free[static_cast<std::size_t>(d)]) g.data()[d] = mass[d] * acceleration[d] - internal_force_.data()[d];
+      if (!free[static_cast<std::size_t>(d)]) {
+        const Real a = v_start ? (v[d] - (*v_start)[d]) / dt : 0.0;
+        g.data()[d] = mass[d] * a - internal_force_.data()[d] - external_force_.data()[d];
+      }
     return g;
   };
   if (resumed_) {
@@ -128,7 +136,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
     loop.initial_total = energy_internal_ + energy_kinetic_;
     energy_external_ = 0;
     sink->output_point(0, 0.0, 0.0);
-    loop.support_force = support_force();  // the end-of-step value of the previous step
+    loop.support_force = support_force(nullptr);  // the end-of-step value of the previous step
   }
   const Real initial_total = loop.initial_total;
   const auto loop_start = Clock::now();
@@ -137,11 +145,12 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   // (summary.json timing.stage_<name>_s).
   Index step = 0;
   Real t = 0;
-  Eigen::VectorXd u_old;
+  Eigen::VectorXd u_old, v_start;
   const std::vector<StepStage> step_stages{
       {"kick_drift",  // half-step velocity, positions, prescribed motion
        [&] {
          u_old = u;
+         v_start = v;
          for (Index d = 0; d < 3 * n; ++d)
            if (free[static_cast<std::size_t>(d)]) v[d] += 0.5 * dt * acceleration[d];
          apply_prescribed(velocity_, (t - 0.5 * dt) / options.end_time, true);
@@ -164,7 +173,7 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
        }},
       {"energies",  // external work (trapezoidal in the generalized forces), kinetic energy
        [&] {
-         const PointMatrix g_new = support_force();
+         const PointMatrix g_new = support_force(&v_start);
          const Eigen::Map<const Eigen::VectorXd> go(g_old.data(), 3 * n), gn(g_new.data(), 3 * n);
          if (ranks_) {  // the owned dofs of every rank, one reduction
            std::vector<Real> sums{0.5 * ((go + gn).array() * (u - u_old).array() * owned_dof_.array()).sum(),
