@@ -44,4 +44,11 @@ class AnalysisError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A solver the case asks for is not available to this process (the PETSc module could not be loaded):
+/// an AnalysisError that callers pass on as it is, without advice about the system being solved.
+class SolverUnavailable : public AnalysisError {
+ public:
+  using AnalysisError::AnalysisError;
+};
+
 }  // namespace lamina

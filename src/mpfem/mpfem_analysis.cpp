@@ -399,6 +399,8 @@ void MpfemAnalysis::solve_linear() {
       solver.min_rcond = 1e-13;
       solver.allow_fallback = false;
       uf = solve_system(k, rhs, solver, true);
+    } catch (const SolverUnavailable&) {
+      throw;  // nothing about this system: no advice on its supports
     } catch (const AnalysisError& e) {
       throw AnalysisError(std::string(e.what()) +
                           " (mpfem: fix enough particle dofs (boundary: fix / displacement) to remove the rigid-body "

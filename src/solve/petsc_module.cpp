@@ -29,7 +29,7 @@ const PetscSolvers& solvers() {
     why = "it is from another lamina build (interface version " + std::to_string(loaded->abi) + ", expected " +
           std::to_string(petsc_solvers_abi) + ")";
   if (!loaded || loaded->abi != petsc_solvers_abi)
-    throw AnalysisError("the PETSc solvers module " + std::string(LAMINA_PETSC_SOLVERS_NAME) + " could not be loaded: " + why);
+    throw SolverUnavailable("the PETSc solvers module " + std::string(LAMINA_PETSC_SOLVERS_NAME) + " could not be loaded: " + why);
   table = loaded;  // the module stays loaded until the process ends
   parallel::Environment::before_finalize([] { table->finalize(); });
   std::atexit([] { table->finalize(); });
