@@ -228,6 +228,8 @@ void MpfemAnalysis::solve_large_deformation(OutputSink* sink) {
         solver.min_rcond = 1e-13;
         solver.allow_fallback = true;  // the tangent may be indefinite away from equilibrium
         du = solve_system(k, -residual, solver, false);
+      } catch (const SolverUnavailable&) {
+        throw;  // no solver at all: not a failed increment to cut back
       } catch (const AnalysisError& e) {
         failure = std::string("the tangent system could not be solved: ") + e.what();
         return false;

@@ -112,9 +112,8 @@ void PeridynamicAnalysis::run_explicit(OutputSink* sink) {
   };
   // External generalized force: the loads on free dofs; on prescribed ones the support force that moves the
   // node as prescribed, R = m a - f_int - f_ext, with a the prescribed motion's acceleration over the last
-  // step (v_start: the velocities at its start; none at t = 0). Before, `acceleration` there was the
-  // free-body one, (f_int + f_ext) / m, so R was ~0 and a run driven by prescribed displacements reported
-  // no external work (an energy error of 1e17 on validation/pd_plate_tension run explicitly).
+  // step (v_start: the velocities at its start; none at t = 0). (`acceleration` there is the free-body one,
+  // (f_int + f_ext) / m, which would make R ~0 and leave the prescribed motion's work out.)
   auto support_force = [&](const Eigen::VectorXd* v_start) {
     PointMatrix g = external_force_;
     for (Index d = 0; d < 3 * n; ++d)
