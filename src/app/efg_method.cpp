@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "app/efg_method.hpp"
 
 #include <fmt/format.h>
@@ -105,8 +106,13 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
       const int g = static_cast<int>(integration.integer("volumetric_gauss", 1, 1, 20));
       o.volumetric_gauss = {g, g, g};
     }
-    const std::string correction = integration.word("correction", {"none", "vci"}, "none");
-    o.correction = correction == "vci" ? efg::IntegrationCorrection::vci : efg::IntegrationCorrection::none;
+    const std::string correction = integration.word("correction", {"none", "vci", "smoothed"}, "none");
+    o.correction = correction == "vci"        ? efg::IntegrationCorrection::vci
+                   : correction == "smoothed" ? efg::IntegrationCorrection::smoothed
+                                              : efg::IntegrationCorrection::none;
+    if (o.correction == efg::IntegrationCorrection::smoothed && *std::min_element(o.gauss.begin(), o.gauss.end()) < 2)
+      integration.child("correction").error("gauss >= 2 with correction: smoothed (the linear fields of a cell need 2 points per direction)",
+                                            "gauss " + std::to_string(*std::min_element(o.gauss.begin(), o.gauss.end())));
     integration.reject_unknown_keys();
   }
   const std::string bc = section.word("essential_bc", {"penalty", "penalty_nodes", "nitsche", "lagrange"}, "penalty");

@@ -306,6 +306,25 @@ SurfaceQuadrature boundary_quadrature(const BackgroundCells& cells, const std::a
   return finish(std::move(q), points, normals, weights, sizes);
 }
 
+CellFaceQuadrature cell_face_quadrature(const BackgroundCells& cells, const std::array<int, 3>& gauss) {
+  std::array<std::vector<Real>, 3> xi, wi;
+  for (int d = 0; d < 3; ++d) gauss_legendre(gauss[d], xi[d], wi[d]);
+  std::vector<Vec3> points, normals;
+  std::vector<Real> weights, sizes;
+  CellFaceQuadrature result;
+  SurfaceQuadrature& q = result.faces;
+  const Index n = cells.size();
+  result.cell_begin.resize(static_cast<std::size_t>(n + 1));
+  for (Index c = 0; c < n; ++c) {
+    result.cell_begin[static_cast<std::size_t>(c)] = static_cast<Index>(points.size());
+    for (int d = 0; d < 3; ++d)
+      for (int side = 0; side < 2; ++side) append_face(cells, c, d, side, gauss, 1, xi, wi, q, points, normals, weights, sizes);
+  }
+  result.cell_begin[static_cast<std::size_t>(n)] = static_cast<Index>(points.size());
+  q = finish(std::move(q), points, normals, weights, sizes);
+  return result;
+}
+
 SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
                                         const std::array<int, 3>& gauss, int split,
                                         const std::function<bool(const Vec3&, int)>& selected) {

@@ -65,6 +65,15 @@ struct SurfaceQuadrature {
 VolumeQuadrature volume_quadrature(const BackgroundCells& cells, const std::array<int, 3>& gauss);
 SurfaceQuadrature boundary_quadrature(const BackgroundCells& cells, const std::array<int, 3>& gauss);
 
+/// All faces of every cell (interior faces once per side, with the outward normal of that cell), for
+/// gradient smoothing over the cells: the points of cell c are [cell_begin[c], cell_begin[c + 1]). Two
+/// cells sharing a face get the same points with opposite normals, so face sums cancel between them.
+struct CellFaceQuadrature {
+  SurfaceQuadrature faces;
+  std::vector<Index> cell_begin;
+};
+CellFaceQuadrature cell_face_quadrature(const BackgroundCells& cells, const std::array<int, 3>& gauss);
+
 /// The part of the boundary where `selected(x, face)` holds, for loads and constraints on part of a
 /// face: faces where the selection holds at every point of `base` (and at points set in from the face's
 /// edges and corners) keep their points; every other face is split into split x split sub-faces with the

@@ -132,9 +132,9 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const pa
                        "penalty, penalty_nodes or lagrange with volumetric: projected (Nitsche's consistency term "
                        "uses the unprojected stress)",
                        "nitsche");
-    if (problem_.options.correction == IntegrationCorrection::vci)
-      throw InputError("efg.integration.correction", "none with volumetric: projected (VCI is not combined with it)",
-                       "vci");
+    if (problem_.options.correction != IntegrationCorrection::none)
+      throw InputError("efg.integration.correction", "none with volumetric: projected (no correction is combined with it)",
+                       problem_.options.correction == IntegrationCorrection::vci ? "vci" : "smoothed");
   }
   if (problem_.options.formulation != Formulation::galerkin) {
     const std::string name = to_string(problem_.options.formulation);

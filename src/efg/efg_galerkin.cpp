@@ -34,9 +34,16 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   VolumeIntegrals integrals, reduced_integrals;
   const bool reduced = reduced_.size() > 0;
   std::vector<IndexList> groups;
-  std::vector<IndexList> cell_nodes = cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, &groups);
+  // gradient smoothing couples every pair of nodes of a cell (face points included)
+  const bool smoothed = options.correction == IntegrationCorrection::smoothed;
+  CellFaceQuadrature cell_faces;
+  if (smoothed) cell_faces = cell_face_quadrature(*cells_, options.gauss);
+  std::vector<IndexList> cell_nodes =
+      cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, smoothed ? nullptr : &groups, smoothed ? &cell_faces : nullptr);
+  if (smoothed) groups = cell_nodes;
   if (reduced) {
-    const std::vector<IndexList> extra = cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, &groups);
+    const std::vector<IndexList> extra =
+        cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, smoothed ? nullptr : &groups);
     IndexList merged;
     for (std::size_t c = 0; c < cell_nodes.size(); ++c) {
       merged.clear();
@@ -104,6 +111,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   input.materials = projected ? &deviatoric_materials_ : &materials_;
   input.body_force = body_force_.cols() == volume_.size() ? &body_force_ : nullptr;
   input.vci = vci ? &xi : nullptr;
+  input.smoothing = smoothed ? &cell_faces : nullptr;
   if (reduced) {
     input.reduced = &reduced_;
     input.material_of_reduced_point = &material_of_reduced_point_;

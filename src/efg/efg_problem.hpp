@@ -43,8 +43,9 @@ struct WeightedLeastSquaresOptions {
   bool cell_centre_points = false;            // auxiliary equilibrium points at the background cell centres
 };
 
-/// Correction of the quadrature for linear exactness (see galerkin_assembly.hpp).
-enum class IntegrationCorrection { none, vci };
+/// Correction of the quadrature for consistency (see galerkin_assembly.hpp): none, VCI (linear,
+/// Petrov-Galerkin), or gradients smoothed over the background cells (linear in each cell, symmetric).
+enum class IntegrationCorrection { none, vci, smoothed };
 
 struct EfgOptions {
   Formulation formulation = Formulation::galerkin;

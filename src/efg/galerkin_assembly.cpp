@@ -2,10 +2,13 @@
 
 #include <omp.h>
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <exception>
+#include <stdexcept>
 
 namespace lamina::efg {
 
@@ -34,7 +37,8 @@ struct FirstError {
 }  // namespace
 
 std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, const VolumeQuadrature& quadrature,
-                                       VolumeIntegrals* integrals, std::vector<IndexList>* point_groups) {
+                                       VolumeIntegrals* integrals, std::vector<IndexList>* point_groups,
+                                       const CellFaceQuadrature* faces) {
   const Index cells = static_cast<Index>(quadrature.cell_begin.size()) - 1;
   const Index n = shapes.node_count();
   std::vector<IndexList> result(static_cast<std::size_t>(cells));
@@ -78,6 +82,13 @@ std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, con
             }
           }
         }
+        if (faces)
+          for (Index f = faces->cell_begin[static_cast<std::size_t>(c)]; f < faces->cell_begin[static_cast<std::size_t>(c + 1)]; ++f) {
+            shapes.neighbours(faces->faces.points.col(f), sv.neighbours);
+            merged.clear();
+            std::set_union(nodes.begin(), nodes.end(), sv.neighbours.begin(), sv.neighbours.end(), std::back_inserter(merged));
+            nodes.swap(merged);
+          }
       } catch (...) {
         failure.record(c);
         break;
@@ -256,6 +267,94 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
         }
       }
     };
+    // Gradient smoothing (see the header): per cell the moments R_a (4 x n, one per direction a) and
+    // M^-1 of the linear fields q on the cell's rule; then grad phi_i,a at x = R_a(:, i) . M^-1 q(x).
+    Eigen::Matrix<Real, 4, Eigen::Dynamic> moments[3];
+    Eigen::Matrix4d inverse_mass;
+    Vec3 cell_centre = Vec3::Zero();
+    Real cell_scale = 1.0;
+    auto linear_fields = [&](const Vec3& x) {
+      Eigen::Vector4d q;
+      q << 1.0, (x - cell_centre) / cell_scale;
+      return q;
+    };
+    auto smooth_cell = [&](Index c, Index n) {
+      const CellFaceQuadrature& faces = *in.smoothing;
+      const Index q0 = quadrature.cell_begin[static_cast<std::size_t>(c)];
+      const Index Q = quadrature.cell_begin[static_cast<std::size_t>(c + 1)] - q0;
+      cell_centre.setZero();
+      for (Index q = 0; q < Q; ++q) cell_centre += quadrature.points.col(q0 + q);
+      cell_centre /= static_cast<Real>(Q);
+      cell_scale = 0.0;
+      for (Index q = 0; q < Q; ++q) cell_scale = std::max(cell_scale, (quadrature.points.col(q0 + q) - cell_centre).cwiseAbs().maxCoeff());
+      if (!(cell_scale > 0.0)) cell_scale = 1.0;
+      Eigen::Matrix4d mass = Eigen::Matrix4d::Zero();
+      Eigen::RowVectorXd volume_phi = Eigen::RowVectorXd::Zero(n);
+      if (static_cast<Index>(sv.size()) < 1) sv.resize(1);
+      auto& s = sv[0];
+      for (int a = 0; a < 3; ++a) moments[a].setZero(4, n);
+      for (Index q = 0; q < Q; ++q) {
+        const Vec3 x = quadrature.points.col(q0 + q);
+        const Real weight = quadrature.weights[q0 + q];
+        const Eigen::Vector4d p = linear_fields(x);
+        mass.noalias() += weight * p * p.transpose();
+        in.shapes->evaluate(x, 0, s);
+        for (std::size_t k = 0; k < s.neighbours.size(); ++k) {
+          const int i = local_index[static_cast<std::size_t>(s.neighbours[k])];
+          if (i < 0) throw std::logic_error("EFG assembly: neighbour outside the cell's node list");
+          volume_phi[i] += weight * s.phi[static_cast<Index>(k)];
+        }
+        if (in.body_force) {
+          const Vec3 b = in.body_force->col(q0 + q) * weight;
+          if (b.squaredNorm() > 0)
+            for (std::size_t k = 0; k < s.neighbours.size(); ++k)
+              my_f.segment<3>(3 * s.neighbours[k]) += s.phi[static_cast<Index>(k)] * b;
+        }
+      }
+      for (Index f = faces.cell_begin[static_cast<std::size_t>(c)]; f < faces.cell_begin[static_cast<std::size_t>(c + 1)]; ++f) {
+        const Vec3 x = faces.faces.points.col(f);
+        const Vec3 wn = faces.faces.weights[f] * faces.faces.normals.col(f);
+        const Eigen::Vector4d p = linear_fields(x);
+        in.shapes->evaluate(x, 0, s);
+        for (std::size_t k = 0; k < s.neighbours.size(); ++k) {
+          const int i = local_index[static_cast<std::size_t>(s.neighbours[k])];
+          if (i < 0) throw std::logic_error("EFG assembly: face neighbour outside the cell's node list");
+          const Real phi = s.phi[static_cast<Index>(k)];
+          for (int a = 0; a < 3; ++a) moments[a].col(i) += (wn[a] * phi) * p;
+        }
+      }
+      // - sum_q w_q phi_i grad q_k: grad q_(a+1) = e_a / s
+      for (int a = 0; a < 3; ++a) moments[a].row(a + 1) -= volume_phi / cell_scale;
+      // On a curved cell the face and volume rules satisfy the divergence theorem for q only to their
+      // quadrature error (the defect D_a = sum_f w_f n_f,a q(x_f) - sum_q w_q grad_a q): that would give a
+      // rigid translation a small smoothed gradient. Shared out in proportion to sum_q w_q phi_i (which
+      // adds up to the cell volume, phi being a partition of unity), it cancels for constant fields.
+      Eigen::Matrix<Real, 4, 3> defect = Eigen::Matrix<Real, 4, 3>::Zero();
+      for (Index f = faces.cell_begin[static_cast<std::size_t>(c)]; f < faces.cell_begin[static_cast<std::size_t>(c + 1)]; ++f)
+        defect.noalias() += linear_fields(faces.faces.points.col(f)) *
+                            (faces.faces.weights[f] * faces.faces.normals.col(f)).transpose();
+      const Real volume = quadrature.weights.segment(q0, Q).sum();
+      for (int a = 0; a < 3; ++a) defect(a + 1, a) -= volume / cell_scale;
+      for (int a = 0; a < 3; ++a) moments[a].noalias() -= defect.col(a) * (volume_phi / volume);
+      Eigen::LDLT<Eigen::Matrix4d> factor(mass);
+      if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 1e-12 * factor.vectorD().maxCoeff()))
+        throw std::runtime_error("EFG gradient smoothing: the cell's quadrature does not determine linear fields "
+                                 "(use at least 2 Gauss points per direction)");
+      inverse_mass = factor.solve(Eigen::Matrix4d::Identity());
+    };
+    // Y (points of `rule` in cell c) from the smoothed gradients of smooth_cell.
+    auto load_smoothed = [&](const VolumeQuadrature& rule, Index r0, Index R, Index n) {
+      Y.setZero(R, 3 * n);
+      w.resize(R);
+      for (Index q = 0; q < R; ++q) {
+        w[q] = rule.weights[r0 + q];
+        const Eigen::Vector4d p = inverse_mass * linear_fields(rule.points.col(r0 + q));
+        for (int a = 0; a < 3; ++a) {
+          const Eigen::RowVectorXd g = p.transpose() * moments[a];
+          for (Index i = 0; i < n; ++i) Y(q, 3 * i + a) = g[i];
+        }
+      }
+    };
     // out = Yt^T diag(weight) Y; only the upper triangle when symmetric.
     auto products = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd& out) {
       WY.noalias() = weight.asDiagonal() * Y;
@@ -285,7 +384,12 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       const Index Q = quadrature.cell_begin[static_cast<std::size_t>(c + 1)] - q0;
       if (Q == 0 || n == 0) return;
       for (Index i = 0; i < n; ++i) local_index[static_cast<std::size_t>(nodes[static_cast<std::size_t>(i)])] = static_cast<int>(i);
-      load_points(quadrature, q0, Q, n, true, in.vci);
+      if (in.smoothing) {
+        smooth_cell(c, n);
+        load_smoothed(quadrature, q0, Q, n);
+      } else {
+        load_points(quadrature, q0, Q, n, true, in.vci);
+      }
       // K block (i, j) = lambda_scale c_lambda + mu_scale (c_mu^T + tr(c_mu) I)
       Real lambda_scale = 1.0, mu_scale = 1.0;
       const Eigen::MatrixXd* lambda_part = &C_lambda;
@@ -296,7 +400,8 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
         const VolumeQuadrature& reduced = *in.reduced;
         const Index r0 = reduced.cell_begin[static_cast<std::size_t>(c)];
         const Index R = reduced.cell_begin[static_cast<std::size_t>(c + 1)] - r0;
-        load_points(reduced, r0, R, n, false, in.vci_reduced ? in.vci_reduced : in.vci);
+        if (in.smoothing) load_smoothed(reduced, r0, R, n);
+        else load_points(reduced, r0, R, n, false, in.vci_reduced ? in.vci_reduced : in.vci);
         material_weights(*in.material_of_reduced_point, r0, R, wl, wm);
         products(wl, C_lambda);
       } else {

@@ -31,6 +31,18 @@
 //   xi_I = (sum_s phi_I n w_s - sum_q grad phi_I w_q) / sum_q phi_I w_q,
 // which restores the constraint exactly (Petrov-Galerkin: K is no longer symmetric, so the
 // system is solved by sparse LU). The trial functions are unchanged.
+//
+// Gradient smoothing over the background cells (correction `smoothed`; quadratically consistent
+// smoothed gradients in the spirit of Duan, Li & Belytschko, IJNME 92 (2012) 399-424, and Wang & Wu,
+// CMAME 349 (2019) 628-672): in each cell C the gradient of phi_I is replaced by the linear field
+// g_I(x) = G_I q(x), q = [1, (x - x_C) / s], that satisfies the divergence theorem against every
+// linear q on the cell's own quadrature,
+//   sum_q w_q g_I(x_q) q_k(x_q) = sum_f w_f n_f phi_I(x_f) q_k(x_f) - sum_q w_q phi_I(x_q) grad q_k,
+// f over the points of the cell's six faces. So g_I is the L2 projection of grad phi_I onto linear
+// fields, exact wherever phi_I is a polynomial of degree <= 2; for a field u of the basis the
+// smoothed gradient is exact (MLS reproduces u), and the interior face sums cancel between cells,
+// so the quadratic patch test holds to round-off whatever the node layout, the cell shape or the
+// misalignment of supports and cells. Trial and test gradients are the same: K stays symmetric.
 #include <vector>
 
 #include "efg/background_quadrature.hpp"
@@ -49,8 +61,10 @@ struct VolumeIntegrals {
 /// `integrals` also the volume integrals of phi_I and grad phi_I (for VCI); with `point_groups` the
 /// distinct neighbour lists of the points (appended, cell by cell): two nodes couple in K only if
 /// some quadrature point sees both, which is sparser than the cell unions.
+/// With `faces` the neighbours of each cell's face points join its union (gradient smoothing).
 std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, const VolumeQuadrature& quadrature,
-                                       VolumeIntegrals* integrals, std::vector<IndexList>* point_groups = nullptr);
+                                       VolumeIntegrals* integrals, std::vector<IndexList>* point_groups = nullptr,
+                                       const CellFaceQuadrature* faces = nullptr);
 
 /// VCI correction xi_I (3 x N) from the volume integrals and the boundary integrals sum_s phi_I n w_s.
 Eigen::Matrix3Xd vci_correction(const VolumeIntegrals& volume, const Eigen::Matrix3Xd& boundary);
@@ -67,6 +81,9 @@ struct VolumeAssembly {
   const VolumeQuadrature* reduced = nullptr;
   const std::vector<int>* material_of_reduced_point = nullptr;
   const Eigen::Matrix3Xd* vci_reduced = nullptr;                  // xi_I of the reduced rule (with vci)
+  /// Gradient smoothing over the cells (correction `smoothed`): the faces of every cell. The cell
+  /// node lists must hold the face points' neighbours and the pattern must couple every pair of them.
+  const CellFaceQuadrature* smoothing = nullptr;
   /// Distributed assembly: this call adds the cells of slab `part` of `parts` (contiguous slabs of the
   /// cells sorted along the body's longest axis); the parts of all ranks add up to the whole.
   int part = 0, parts = 1;
