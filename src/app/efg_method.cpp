@@ -106,10 +106,11 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
       const int g = static_cast<int>(integration.integer("volumetric_gauss", 1, 1, 20));
       o.volumetric_gauss = {g, g, g};
     }
-    const std::string correction = integration.word("correction", {"none", "vci", "smoothed"}, "none");
+    const std::string correction = integration.word("correction", {"auto", "none", "vci", "smoothed"}, "auto");
     o.correction = correction == "vci"        ? efg::IntegrationCorrection::vci
                    : correction == "smoothed" ? efg::IntegrationCorrection::smoothed
-                                              : efg::IntegrationCorrection::none;
+                   : correction == "none"     ? efg::IntegrationCorrection::none
+                                              : efg::IntegrationCorrection::automatic;
     if (o.correction == efg::IntegrationCorrection::smoothed && *std::min_element(o.gauss.begin(), o.gauss.end()) < 2)
       integration.child("correction").error("gauss >= 2 with correction: smoothed (the linear fields of a cell need 2 points per direction)",
                                             "gauss " + std::to_string(*std::min_element(o.gauss.begin(), o.gauss.end())));

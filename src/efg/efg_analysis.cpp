@@ -132,7 +132,8 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const pa
                        "penalty, penalty_nodes or lagrange with volumetric: projected (Nitsche's consistency term "
                        "uses the unprojected stress)",
                        "nitsche");
-    if (problem_.options.correction != IntegrationCorrection::none)
+    if (problem_.options.correction == IntegrationCorrection::vci ||
+        problem_.options.correction == IntegrationCorrection::smoothed)
       throw InputError("efg.integration.correction", "none with volumetric: projected (no correction is combined with it)",
                        problem_.options.correction == IntegrationCorrection::vci ? "vci" : "smoothed");
   }
@@ -187,6 +188,18 @@ void EfgAnalysis::setup() {
   std::array<int, 3> counts;
   if (problem_.options.cells) counts = *problem_.options.cells;
   else counts = default_cell_counts(map, cloud.counts);
+  if (problem_.options.correction == IntegrationCorrection::automatic) {
+    // Gauss points are consistent (patch test to round-off) only when the nodes are the cells' own grid;
+    // elsewhere the smoothed gradients are (docs/efg.md section 6)
+    bool on_grid = cloud.parametric.cols() == n;
+    for (Index i = 0; on_grid && i < n; ++i)
+      on_grid = (cloud.positions.col(i) - map.position(cloud.parametric.col(i))).norm() <= 1e-9 * size;
+    const auto& o = problem_.options;
+    const bool can_smooth = o.formulation == Formulation::galerkin && !o.projected_volumetric &&
+                            *std::min_element(o.gauss.begin(), o.gauss.end()) >= 2;
+    problem_.options.correction = !on_grid && can_smooth ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
+  }
+  timings_["integration_smoothed"] = problem_.options.correction == IntegrationCorrection::smoothed ? 1.0 : 0.0;
   cells_ = std::make_unique<BackgroundCells>(make_background_cells(std::move(map), counts));
   volume_ = volume_quadrature(*cells_, problem_.options.gauss);
   if (problem_.options.reduced_volumetric) reduced_ = volume_quadrature(*cells_, problem_.options.volumetric_gauss);

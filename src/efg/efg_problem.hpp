@@ -45,7 +45,9 @@ struct WeightedLeastSquaresOptions {
 
 /// Correction of the quadrature for consistency (see galerkin_assembly.hpp): none, VCI (linear,
 /// Petrov-Galerkin), or gradients smoothed over the background cells (linear in each cell, symmetric).
-enum class IntegrationCorrection { none, vci, smoothed };
+/// automatic: smoothed where the nodes are not the background cells' grid (jittered, irregular), else
+/// none; resolved by EfgAnalysis::setup (docs/efg.md section 6).
+enum class IntegrationCorrection { automatic, none, vci, smoothed };
 
 struct EfgOptions {
   Formulation formulation = Formulation::galerkin;
@@ -54,7 +56,7 @@ struct EfgOptions {
   mls::MlsOptions mls;
   std::optional<std::array<int, 3>> cells;      // background cells per parametric axis (none: from the nodes)
   std::array<int, 3> gauss{2, 2, 2};            // Gauss points per cell and direction
-  IntegrationCorrection correction = IntegrationCorrection::none;
+  IntegrationCorrection correction = IntegrationCorrection::automatic;
   bool reduced_volumetric = false;              // selective reduced integration of the lambda term
   std::array<int, 3> volumetric_gauss{1, 1, 1}; // its Gauss order (default: gauss - 1, at least 1)
   bool projected_volumetric = false;            // lambda term with the divergence projected on nodal pressures

@@ -75,7 +75,7 @@ TEST(SmoothedPatchTest, LinearFieldOnJitteredNodesIsExactAndSymmetric) {
       p.options.mls.basis = basis;
       p.options.mls.kappa = basis == mls::Basis::linear ? 2.0 : 2.5;
       p.options.essential = EssentialMethod::nitsche;
-      if (smoothed) p.options.correction = IntegrationCorrection::smoothed;
+      p.options.correction = smoothed ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
       EfgAnalysis a(p, {});
       a.solve();
       const auto [du, ds] = field_errors(a, linear_field_at, [&](const Vec3&) { return stress; });
@@ -133,7 +133,7 @@ TEST(SmoothedPatchTest, QuadraticFieldWithBodyForceIsExact) {
     p.options.mls.basis = mls::Basis::quadratic;
     p.options.mls.kappa = 2.5;
     p.options.essential = EssentialMethod::nitsche;
-    if (smoothed) p.options.correction = IntegrationCorrection::smoothed;
+    p.options.correction = smoothed ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
     EfgAnalysis a(p, {});
     a.solve();
     const auto [du, ds] = field_errors(a, exact, stress);
@@ -172,7 +172,7 @@ TEST(SmoothedCurvedBody, HydrostaticRingPassesThePatchTestAndBalances) {
       p.loads.push_back(load);
     }
     p.options.essential = EssentialMethod::nitsche;
-    if (smoothed) p.options.correction = IntegrationCorrection::smoothed;
+    p.options.correction = smoothed ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
     EfgAnalysis a(p, {});
     a.solve();
     Real error = 0.0;
@@ -189,6 +189,27 @@ TEST(SmoothedCurvedBody, HydrostaticRingPassesThePatchTestAndBalances) {
   // with and without smoothing: a rigid translation strains no cell.
   EXPECT_LT((reactions[1] - reactions[0]).norm(), 1e-10);
   EXPECT_NEAR(reactions[1][1], 2.0, 1e-6);
+}
+
+// The default (automatic) smooths where the nodes are not the cells' grid: jittered nodes, not the
+// generator's regular grid of a box or of a curved body, and not with a single Gauss point.
+TEST(SmoothedOptions, TheDefaultSmoothsIrregularNodesOnly) {
+  auto resolved = [](EfgProblem p) -> Real {
+    EXPECT_EQ(p.options.correction, IntegrationCorrection::automatic);
+    EfgAnalysis a(p, {});
+    a.solve();
+    return a.timings().at("integration_smoothed");
+  };
+  EXPECT_EQ(resolved(patch_problem(5, 0.0)), 0.0);
+  EXPECT_EQ(resolved(patch_problem(6, 0.25)), 1.0);
+  EfgProblem single = patch_problem(6, 0.25);
+  single.options.gauss = {1, 1, 1};
+  single.options.mls.basis = mls::Basis::linear;
+  EXPECT_EQ(resolved(single), 0.0);
+  EfgProblem ring = make_problem(curved_beam_spec(), {5, 9, 3}, 1e4, 0.3);
+  fix_set(ring, "start");
+  traction_on_set(ring, "end", Vec3(0.0, -1.0, 0.0));
+  EXPECT_EQ(resolved(ring), 0.0);
 }
 
 TEST(SmoothedOptions, ProjectedVolumetricIsRefused) {
