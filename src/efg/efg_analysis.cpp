@@ -195,8 +195,11 @@ void EfgAnalysis::setup() {
     for (Index i = 0; on_grid && i < n; ++i)
       on_grid = (cloud.positions.col(i) - map.position(cloud.parametric.col(i))).norm() <= 1e-9 * size;
     const auto& o = problem_.options;
+    // (with the N nearest nodes as neighbours the shape functions jump where the set changes, and the
+    // face sums of neighbouring cells would not cancel)
     const bool can_smooth = o.formulation == Formulation::galerkin && !o.projected_volumetric &&
-                            *std::min_element(o.gauss.begin(), o.gauss.end()) >= 2;
+                            *std::min_element(o.gauss.begin(), o.gauss.end()) >= 2 &&
+                            o.mls.mode != mls::SupportMode::nearest;
     problem_.options.correction = !on_grid && can_smooth ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
   }
   timings_["integration_smoothed"] = problem_.options.correction == IntegrationCorrection::smoothed ? 1.0 : 0.0;
