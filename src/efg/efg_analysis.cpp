@@ -201,6 +201,9 @@ void EfgAnalysis::setup() {
                             *std::min_element(o.gauss.begin(), o.gauss.end()) >= 2 &&
                             o.mls.mode != mls::SupportMode::nearest;
     problem_.options.correction = !on_grid && can_smooth ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
+    if (problem_.options.correction == IntegrationCorrection::smoothed)
+      notices_.push_back("efg.integration.correction: auto chose smoothed gradients (the nodes are not the background "
+                         "cells' grid: jittered or irregular; docs/efg.md section 6)");
   }
   timings_["integration_smoothed"] = problem_.options.correction == IntegrationCorrection::smoothed ? 1.0 : 0.0;
   cells_ = std::make_unique<BackgroundCells>(make_background_cells(std::move(map), counts));
@@ -449,6 +452,7 @@ void EfgAnalysis::solve() { run_static(nullptr); }
 
 void EfgAnalysis::run(OutputSink& sink) {
   run_static(&sink);
+  for (const auto& text : notices_) sink.notice(text);
   sink.progress(1.0, "done");
   sink.output_point(1, 1.0, 1.0);
 }

@@ -166,6 +166,7 @@ class EfgAnalysis : public Analysis {
   std::unique_ptr<GalerkinSystem> system_;
   solve::SolverReport solver_report_;
   std::map<std::string, Real> timings_;
+  std::vector<std::string> notices_;  // choices the defaults made, for the run's log (OutputSink::notice)
   bool solved_ = false;
 };
 
