@@ -1,7 +1,8 @@
-#include <algorithm>
 #include "app/efg_method.hpp"
 
 #include <fmt/format.h>
+
+#include <algorithm>
 
 #include "app/mls_options_reader.hpp"
 #include "core/error.hpp"
@@ -111,9 +112,10 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
                    : correction == "smoothed" ? efg::IntegrationCorrection::smoothed
                    : correction == "none"     ? efg::IntegrationCorrection::none
                                               : efg::IntegrationCorrection::automatic;
-    if (o.correction == efg::IntegrationCorrection::smoothed && *std::min_element(o.gauss.begin(), o.gauss.end()) < 2)
+    const int fewest_points = *std::min_element(o.gauss.begin(), o.gauss.end());
+    if (o.correction == efg::IntegrationCorrection::smoothed && fewest_points < 2)
       integration.child("correction").error("gauss >= 2 with correction: smoothed (the linear fields of a cell need 2 points per direction)",
-                                            "gauss " + std::to_string(*std::min_element(o.gauss.begin(), o.gauss.end())));
+                                            "gauss " + std::to_string(fewest_points));
     integration.reject_unknown_keys();
   }
   const std::string bc = section.word("essential_bc", {"penalty", "penalty_nodes", "nitsche", "lagrange"}, "penalty");

@@ -41,9 +41,8 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   std::vector<IndexList> cell_nodes =
       cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, smoothed ? nullptr : &groups, smoothed ? &cell_faces : nullptr);
   if (smoothed) groups = cell_nodes;
-  if (reduced) {
-    const std::vector<IndexList> extra =
-        cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, smoothed ? nullptr : &groups);
+  if (reduced && !smoothed) {  // (smoothed gradients at the reduced points involve the cell's nodes only)
+    const std::vector<IndexList> extra = cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, &groups);
     IndexList merged;
     for (std::size_t c = 0; c < cell_nodes.size(); ++c) {
       merged.clear();

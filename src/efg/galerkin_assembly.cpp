@@ -293,6 +293,8 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       if (static_cast<Index>(sv.size()) < 1) sv.resize(1);
       auto& s = sv[0];
       for (int a = 0; a < 3; ++a) moments[a].setZero(4, n);
+      // the cell's divergence defect for q (below): sum_f w_f q(x_f) n_f^T - sum_q w_q grad q^T
+      Eigen::Matrix<Real, 4, 3> defect = Eigen::Matrix<Real, 4, 3>::Zero();
       for (Index q = 0; q < Q; ++q) {
         const Vec3 x = quadrature.points.col(q0 + q);
         const Real weight = quadrature.weights[q0 + q];
@@ -315,6 +317,7 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
         const Vec3 x = faces.faces.points.col(f);
         const Vec3 wn = faces.faces.weights[f] * faces.faces.normals.col(f);
         const Eigen::Vector4d p = linear_fields(x);
+        defect.noalias() += p * wn.transpose();
         in.shapes->evaluate(x, 0, s);
         for (std::size_t k = 0; k < s.neighbours.size(); ++k) {
           const int i = local_index[static_cast<std::size_t>(s.neighbours[k])];
@@ -329,10 +332,6 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       // quadrature error (the defect D_a = sum_f w_f n_f,a q(x_f) - sum_q w_q grad_a q): that would give a
       // rigid translation a small smoothed gradient. Shared out in proportion to sum_q w_q phi_i (which
       // adds up to the cell volume, phi being a partition of unity), it cancels for constant fields.
-      Eigen::Matrix<Real, 4, 3> defect = Eigen::Matrix<Real, 4, 3>::Zero();
-      for (Index f = faces.cell_begin[static_cast<std::size_t>(c)]; f < faces.cell_begin[static_cast<std::size_t>(c + 1)]; ++f)
-        defect.noalias() += linear_fields(faces.faces.points.col(f)) *
-                            (faces.faces.weights[f] * faces.faces.normals.col(f)).transpose();
       const Real volume = quadrature.weights.segment(q0, Q).sum();
       for (int a = 0; a < 3; ++a) defect(a + 1, a) -= volume / cell_scale;
       for (int a = 0; a < 3; ++a) moments[a].noalias() -= defect.col(a) * (volume_phi / volume);
@@ -349,10 +348,8 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       for (Index q = 0; q < R; ++q) {
         w[q] = rule.weights[r0 + q];
         const Eigen::Vector4d p = inverse_mass * linear_fields(rule.points.col(r0 + q));
-        for (int a = 0; a < 3; ++a) {
-          const Eigen::RowVectorXd g = p.transpose() * moments[a];
-          for (Index i = 0; i < n; ++i) Y(q, 3 * i + a) = g[i];
-        }
+        for (Index i = 0; i < n; ++i)
+          for (int a = 0; a < 3; ++a) Y(q, 3 * i + a) = p.dot(moments[a].col(i));
       }
     };
     // out = Yt^T diag(weight) Y; only the upper triangle when symmetric.
