@@ -118,11 +118,12 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
                                             "gauss " + std::to_string(fewest_points));
     integration.reject_unknown_keys();
   }
-  const std::string bc = section.word("essential_bc", {"penalty", "penalty_nodes", "nitsche", "lagrange"}, "penalty");
+  const std::string bc = section.word("essential_bc", {"auto", "penalty", "penalty_nodes", "nitsche", "lagrange"}, "auto");
   o.essential = bc == "nitsche"         ? efg::EssentialMethod::nitsche
                 : bc == "lagrange"      ? efg::EssentialMethod::lagrange
                 : bc == "penalty_nodes" ? efg::EssentialMethod::penalty_nodes
-                                        : efg::EssentialMethod::penalty;
+                : bc == "penalty"       ? efg::EssentialMethod::penalty
+                                        : efg::EssentialMethod::automatic;
   if (section.has("penalty")) o.penalty = section.real("penalty", std::nullopt, 0.0, INFINITY, true);
   o.penalty_factor = section.real("penalty_factor", 1e5, 0.0, 1e16, true);
   io::NodeReader nitsche = section.child("nitsche");

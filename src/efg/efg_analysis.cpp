@@ -62,6 +62,7 @@ std::string kappa_hint(const mls::MlsOptions& o) {
 
 std::string to_string(EssentialMethod method) {
   switch (method) {
+    case EssentialMethod::automatic: return "auto";
     case EssentialMethod::penalty: return "penalty";
     case EssentialMethod::penalty_nodes: return "penalty_nodes";
     case EssentialMethod::nitsche: return "nitsche";
@@ -123,6 +124,19 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const pa
     // the mu part alone: E' = 2 mu, nu' = 0 gives lambda' = 0, mu' = mu
     deviatoric_materials_.push_back(material::LinearElastic{2.0 * materials_.back().mu(), 0.0});
   }
+  if (problem_.options.essential == EssentialMethod::automatic) {
+    // Nitsche is consistent and does not lock; the surface penalty binds the shape functions at every face
+    // Gauss point and locks on irregular nodes and thin or curved bodies (docs/efg.md section 3). Nitsche's
+    // beta ~ lambda + 2 mu and its traction term would lock a nearly incompressible body, and its traction
+    // is not the projected one: penalty there.
+    bool nearly_incompressible = false;
+    for (const auto& m : materials_) nearly_incompressible |= m.nu > 0.45;
+    problem_.options.essential = problem_.options.formulation == Formulation::galerkin && !nearly_incompressible &&
+                                         !problem_.options.projected_volumetric
+                                     ? EssentialMethod::nitsche
+                                     : EssentialMethod::penalty;
+  }
+  timings_["essential_nitsche"] = problem_.options.essential == EssentialMethod::nitsche ? 1.0 : 0.0;
   if (problem_.options.projected_volumetric) {
     if (problem_.options.formulation != Formulation::galerkin)
       throw InputError("efg.integration.volumetric", "full with a strong-form formulation (projected is a Galerkin option)",

@@ -28,8 +28,10 @@ struct EfgMaterial {
   std::optional<model::Selection> region;   // none = everywhere
 };
 
-/// How essential boundary conditions are imposed (see essential_boundary.hpp).
-enum class EssentialMethod { penalty, penalty_nodes, nitsche, lagrange };
+/// How essential boundary conditions are imposed (see essential_boundary.hpp). automatic: Nitsche for the
+/// Galerkin formulation unless a material is nearly incompressible (nu > 0.45) or the volumetric term is
+/// projected, else penalty; resolved by the EfgAnalysis constructor (docs/efg.md section 3).
+enum class EssentialMethod { automatic, penalty, penalty_nodes, nitsche, lagrange };
 
 /// Discretisation of the weighted residual equation (seed 004 eq 1-31, section 1.2.2): Galerkin
 /// (weak form, background quadrature), point collocation (collocation_system.hpp) or weighted
@@ -65,7 +67,7 @@ struct EfgOptions {
   /// n / 2 + 1 per direction, as the vertices of Taylor-Hood Q2/Q1 elements; the displacement nodes
   /// themselves if they are not a structured grid).
   std::optional<std::array<int, 3>> pressure_nodes;
-  EssentialMethod essential = EssentialMethod::penalty;
+  EssentialMethod essential = EssentialMethod::automatic;
   std::optional<Real> penalty;                  // absolute penalty value (none: penalty_factor x stiffness scale)
   Real penalty_factor = 1e5;
   Real nitsche_factor = 100.0;                  // beta = factor * (lambda + 2 mu) / h
