@@ -126,6 +126,9 @@ efg::EfgOptions read_efg_options(const io::NodeReader& section) {
                                         : efg::EssentialMethod::automatic;
   if (section.has("penalty")) o.penalty = section.real("penalty", std::nullopt, 0.0, INFINITY, true);
   o.penalty_factor = section.real("penalty_factor", 1e5, 0.0, 1e16, true);
+  // a penalty value given without essential_bc asks for the penalty (auto would choose Nitsche and ignore it)
+  if (o.essential == efg::EssentialMethod::automatic && (section.has("penalty") || section.has("penalty_factor")))
+    o.essential = efg::EssentialMethod::penalty;
   io::NodeReader nitsche = section.child("nitsche");
   if (nitsche.defined() && nitsche.expect_map()) {
     o.nitsche_factor = nitsche.real("factor", 100.0, 0.0, 1e12, true);

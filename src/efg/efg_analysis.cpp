@@ -126,7 +126,7 @@ EfgAnalysis::EfgAnalysis(EfgProblem problem, std::vector<Probe> probes, const pa
   }
   if (problem_.options.essential == EssentialMethod::automatic) {
     // Nitsche is consistent and does not lock; the surface penalty binds the shape functions at every face
-    // Gauss point and locks on irregular nodes and thin or curved bodies (docs/efg.md section 3). Nitsche's
+    // Gauss point and locks on irregular nodes and thin or curved bodies (docs/efg.md sections 3, 6). Nitsche's
     // beta ~ lambda + 2 mu and its traction term would lock a nearly incompressible body, and its traction
     // is not the projected one: penalty there.
     bool nearly_incompressible = false;

@@ -30,7 +30,7 @@ struct EfgMaterial {
 
 /// How essential boundary conditions are imposed (see essential_boundary.hpp). automatic: Nitsche for the
 /// Galerkin formulation unless a material is nearly incompressible (nu > 0.45) or the volumetric term is
-/// projected, else penalty; resolved by the EfgAnalysis constructor (docs/efg.md section 3).
+/// projected, else penalty; resolved by the EfgAnalysis constructor (docs/efg.md section 6).
 enum class EssentialMethod { automatic, penalty, penalty_nodes, nitsche, lagrange };
 
 /// Discretisation of the weighted residual equation (seed 004 eq 1-31, section 1.2.2): Galerkin
