@@ -1,5 +1,6 @@
 #include "efg/background_quadrature.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <numbers>
@@ -49,6 +50,37 @@ BackgroundCells make_background_cells(geometry::VolumeMap map, const std::array<
       cells.breaks[d][static_cast<std::size_t>(i)] = i == counts[d] ? axis.hi : axis.lo + (axis.hi - axis.lo) * i / counts[d];
   }
   return cells;
+}
+
+Real largest_cell_turn(const BackgroundCells& cells) {
+  Real largest = 0.0;
+  for (Index c = 0; c < cells.size(); ++c) {
+    Vec3 lo, hi;
+    cells.bounds(c, lo, hi);
+    Vec3 corner[8];
+    for (int k = 0; k < 8; ++k)
+      corner[k] = cells.map.position(Vec3((k & 1) ? hi[0] : lo[0], (k & 2) ? hi[1] : lo[1], (k & 4) ? hi[2] : lo[2]));
+    for (int d = 0; d < 3; ++d) {
+      const int bit = 1 << d;
+      Vec3 edge[4];
+      int count = 0;
+      Real longest = 0.0;
+      for (int k = 0; k < 8; ++k)
+        if (!(k & bit)) {
+          edge[count] = corner[k | bit] - corner[k];
+          longest = std::max(longest, edge[count].norm());
+          ++count;
+        }
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) {
+          const Real na = edge[a].norm(), nb = edge[b].norm();
+          if (na <= 1e-9 * longest || nb <= 1e-9 * longest) continue;  // a collapsed edge
+          const Real cosine = std::clamp(edge[a].dot(edge[b]) / (na * nb), -1.0, 1.0);
+          largest = std::max(largest, std::acos(cosine));
+        }
+    }
+  }
+  return largest;
 }
 
 Mat3 map_jacobian(const geometry::VolumeMap& map, const Vec3& u, const Vec3& h) {

@@ -42,6 +42,11 @@ std::array<int, 3> default_cell_counts(const geometry::VolumeMap& map, const std
 
 BackgroundCells make_background_cells(geometry::VolumeMap map, const std::array<int, 3>& counts);
 
+/// How far the cells turn: the largest angle [rad] between two parallel edges of one cell (a cell has four
+/// edges along each parametric direction), over all cells. 0 for the cells of a box or plate, the
+/// sector's angle for a polar cell; edges of zero length (a collapsed axis or pole) are skipped.
+Real largest_cell_turn(const BackgroundCells& cells);
+
 /// dX/du (columns = derivatives along u0, u1, u2) by 4th-order central differences with steps h.
 Mat3 map_jacobian(const geometry::VolumeMap& map, const Vec3& u, const Vec3& h);
 

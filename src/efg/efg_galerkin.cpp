@@ -39,7 +39,8 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   CellFaceQuadrature cell_faces;
   if (smoothed) cell_faces = cell_face_quadrature(*cells_, options.gauss);
   std::vector<IndexList> cell_nodes =
-      cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, smoothed ? nullptr : &groups, smoothed ? &cell_faces : nullptr);
+      cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, smoothed ? nullptr : &groups, smoothed ? &cell_faces : nullptr,
+                      &point_shapes());
   if (smoothed) groups = cell_nodes;
   if (reduced && !smoothed) {  // (smoothed gradients at the reduced points involve the cell's nodes only)
     const std::vector<IndexList> extra = cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, &groups);
@@ -53,7 +54,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   Eigen::Matrix3Xd xi, xi_reduced;
   if (vci) {
     Eigen::Matrix3Xd boundary = Eigen::Matrix3Xd::Zero(3, n);
-    const auto values = shapes_->evaluate_all(surface_.points, 0);
+    const auto values = point_shapes().evaluate_all(surface_.points, 0);
     for (Index s = 0; s < surface_.size(); ++s) {
       const auto& sv = values[static_cast<std::size_t>(s)];
       for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
@@ -81,8 +82,9 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   start = Clock::now();
   PointMatrix constraint_x(3, static_cast<Index>(constraint_points_.size()));
   for (std::size_t i = 0; i < constraint_points_.size(); ++i) constraint_x.col(static_cast<Index>(i)) = constraint_points_[i].x;
-  system.constraint_shapes = shapes_->evaluate_all(constraint_x, 1);
+  system.constraint_shapes = point_shapes().evaluate_all(constraint_x, 1);
   const auto& constraint_shapes = system.constraint_shapes;
+  grown_boundary_points_ += count_grown(constraint_shapes);
 
   // pattern
   if (!lagrange)
@@ -111,6 +113,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   input.body_force = body_force_.cols() == volume_.size() ? &body_force_ : nullptr;
   input.vci = vci ? &xi : nullptr;
   input.smoothing = smoothed ? &cell_faces : nullptr;
+  input.face_shapes = &point_shapes();
   if (reduced) {
     input.reduced = &reduced_;
     input.material_of_reduced_point = &material_of_reduced_point_;
@@ -125,6 +128,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   const Real volume_seconds = seconds_since(start);
   timings_["assembly_volume_s"] = volume_seconds;
   timings_["assembly_direct_writes"] = volume_report.direct ? 1.0 : 0.0;
+  grown_boundary_points_ += comm_.sum(volume_report.grown_face_points);
   timings_["gauss_points_per_second"] =
       static_cast<Real>(volume_.size()) / std::max(volume_seconds + timings_["neighbours_s"], 1e-12);
   progress(0.6, "assembled");
@@ -134,7 +138,8 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   if (adds_boundary) {
     PointMatrix load_x(3, static_cast<Index>(point_loads_.size()));
     for (std::size_t i = 0; i < point_loads_.size(); ++i) load_x.col(static_cast<Index>(i)) = point_loads_[i].x;
-    const auto load_shapes = shapes_->evaluate_all(load_x, 0);
+    const auto load_shapes = point_shapes().evaluate_all(load_x, 0);
+    grown_boundary_points_ += count_grown(load_shapes);
     for (std::size_t i = 0; i < point_loads_.size(); ++i) {
       const auto& sv = load_shapes[i];
       for (std::size_t k = 0; k < sv.neighbours.size(); ++k)

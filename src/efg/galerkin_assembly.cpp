@@ -38,7 +38,8 @@ struct FirstError {
 
 std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, const VolumeQuadrature& quadrature,
                                        VolumeIntegrals* integrals, std::vector<IndexList>* point_groups,
-                                       const CellFaceQuadrature* faces) {
+                                       const CellFaceQuadrature* faces, const mls::MlsShapeFunctions* face_shapes) {
+  const mls::MlsShapeFunctions& at_faces = face_shapes ? *face_shapes : shapes;
   const Index cells = static_cast<Index>(quadrature.cell_begin.size()) - 1;
   const Index n = shapes.node_count();
   std::vector<IndexList> result(static_cast<std::size_t>(cells));
@@ -84,7 +85,7 @@ std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, con
         }
         if (faces)
           for (Index f = faces->cell_begin[static_cast<std::size_t>(c)]; f < faces->cell_begin[static_cast<std::size_t>(c + 1)]; ++f) {
-            shapes.neighbours(faces->faces.points.col(f), sv.neighbours);
+            at_faces.neighbours(faces->faces.points.col(f), sv.neighbours);
             merged.clear();
             std::set_union(nodes.begin(), nodes.end(), sv.neighbours.begin(), sv.neighbours.end(), std::back_inserter(merged));
             nodes.swap(merged);
@@ -128,6 +129,7 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
   const Index n_nodes = in.shapes->node_count();
   const bool symmetric = pattern.symmetric();
   const int threads = omp_get_max_threads();
+  Index grown_face_points = 0;
   // Processing order: the cells sorted along the axis of largest extent of their centres, so that
   // contiguous chunks are slabs of the body whatever the cell numbering.
   std::vector<Index> order(static_cast<std::size_t>(cells));
@@ -318,7 +320,11 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
         const Vec3 wn = faces.faces.weights[f] * faces.faces.normals.col(f);
         const Eigen::Vector4d p = linear_fields(x);
         defect.noalias() += p * wn.transpose();
-        in.shapes->evaluate(x, 0, s);
+        (in.face_shapes ? in.face_shapes : in.shapes)->evaluate(x, 0, s);
+        if (s.remedy_steps > 0) {
+#pragma omp atomic
+          ++grown_face_points;
+        }
         for (std::size_t k = 0; k < s.neighbours.size(); ++k) {
           const int i = local_index[static_cast<std::size_t>(s.neighbours[k])];
           if (i < 0) throw std::logic_error("EFG assembly: face neighbour outside the cell's node list");
@@ -494,6 +500,7 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
     if (partial_f[static_cast<std::size_t>(t)].size() == f.size()) f += partial_f[static_cast<std::size_t>(t)];
   VolumeAssemblyReport report;
   report.direct = direct;
+  report.grown_face_points = grown_face_points;
   return report;
 }
 
