@@ -243,16 +243,12 @@ void EfgAnalysis::setup() {
   node_search_ = std::make_unique<mls::CellList>(cloud.positions, std::max(size / std::cbrt(static_cast<Real>(n)), 1e-12));
   Eigen::Matrix3Xd spacing = cloud.spacing.cols() == n ? cloud.spacing : Eigen::Matrix3Xd();
   shapes_ = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, problem_.options.mls, spacing);
-  if (problem_.options.formulation == Formulation::galerkin && !problem_.options.mls.singular_remedy) {
-    // Points other than the volume Gauss points (conditions, surface loads, the smoothing's face points, the
-    // nodes, probes) include the body's edges and corners, where a box of kappa 2 on a polar layout holds two
-    // node rings only (the third sits on the support's edge): there the support grows until A is regular
-    // (the seed's SINCHECK). The volume Gauss points keep the case's setting (a support too small there is
-    // an input error).
-    mls::MlsOptions grown = problem_.options.mls;
-    grown.singular_remedy = true;
-    point_shapes_ = std::make_unique<mls::MlsShapeFunctions>(cloud.positions, grown, spacing);
-  }
+  // Points other than the volume Gauss points (conditions, surface loads, the smoothing's face points, the
+  // nodes, probes) include the body's edges and corners, where a box of kappa 2 on a polar layout holds two
+  // node rings only (the third sits on the support's edge): there the support grows until A is regular
+  // (the seed's SINCHECK). The volume Gauss points keep the case's setting (a support too small there is
+  // an input error).
+  grow_at_points_ = problem_.options.formulation == Formulation::galerkin;
   if (problem_.options.projected_volumetric) {
     // pressure nodes with small box supports: Shepard pressure functions (volumetric_projection.hpp)
     mls::MlsOptions pressure = problem_.options.mls;

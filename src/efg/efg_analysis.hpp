@@ -126,12 +126,11 @@ class EfgAnalysis : public Analysis {
   std::vector<int> material_of_point_;
   std::vector<int> material_of_reduced_point_;
   std::unique_ptr<mls::MlsShapeFunctions> shapes_;
-  // the shape functions at every point but the volume Gauss points (conditions, surface loads, the smoothing's
-  // face points, the nodes, probes), with the singular remedy: points on the body's faces, edges and corners
-  // can see too few node planes with a support that is regular at every Gauss point (null: shapes_, which
-  // has the remedy already, or a strong form)
-  std::unique_ptr<mls::MlsShapeFunctions> point_shapes_;
-  const mls::MlsShapeFunctions& point_shapes() const { return point_shapes_ ? *point_shapes_ : *shapes_; }
+  // Points other than the volume Gauss points (conditions, surface loads, the smoothing's face points, the
+  // nodes, probes) are evaluated with the singular remedy (shapes_->evaluate(..., grow_at_points_)): points
+  // on the body's faces, edges and corners can see too few node planes with a support that is regular at
+  // every Gauss point. Set by setup() for the Galerkin formulation.
+  bool grow_at_points_ = false;
   Index grown_boundary_points_ = 0;  // evaluations at such points where the support grew (noted in the log)
   static Index count_grown(const std::vector<mls::ShapeFunctionValues>& values) {
     Index grown = 0;

@@ -40,7 +40,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   if (smoothed) cell_faces = cell_face_quadrature(*cells_, options.gauss);
   std::vector<IndexList> cell_nodes =
       cell_neighbours(*shapes_, volume_, vci ? &integrals : nullptr, smoothed ? nullptr : &groups, smoothed ? &cell_faces : nullptr,
-                      &point_shapes());
+                      grow_at_points_);
   if (smoothed) groups = cell_nodes;
   if (reduced && !smoothed) {  // (smoothed gradients at the reduced points involve the cell's nodes only)
     const std::vector<IndexList> extra = cell_neighbours(*shapes_, reduced_, vci ? &reduced_integrals : nullptr, &groups);
@@ -54,7 +54,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   Eigen::Matrix3Xd xi, xi_reduced;
   if (vci) {
     Eigen::Matrix3Xd boundary = Eigen::Matrix3Xd::Zero(3, n);
-    const auto values = point_shapes().evaluate_all(surface_.points, 0);
+    const auto values = shapes_->evaluate_all(surface_.points, 0, grow_at_points_);
     for (Index s = 0; s < surface_.size(); ++s) {
       const auto& sv = values[static_cast<std::size_t>(s)];
       for (std::size_t k = 0; k < sv.neighbours.size(); ++k)
@@ -82,7 +82,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   start = Clock::now();
   PointMatrix constraint_x(3, static_cast<Index>(constraint_points_.size()));
   for (std::size_t i = 0; i < constraint_points_.size(); ++i) constraint_x.col(static_cast<Index>(i)) = constraint_points_[i].x;
-  system.constraint_shapes = point_shapes().evaluate_all(constraint_x, 1);
+  system.constraint_shapes = shapes_->evaluate_all(constraint_x, 1, grow_at_points_);
   const auto& constraint_shapes = system.constraint_shapes;
   grown_boundary_points_ += count_grown(constraint_shapes);
 
@@ -113,7 +113,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   input.body_force = body_force_.cols() == volume_.size() ? &body_force_ : nullptr;
   input.vci = vci ? &xi : nullptr;
   input.smoothing = smoothed ? &cell_faces : nullptr;
-  input.face_shapes = &point_shapes();
+  input.grow_at_faces = grow_at_points_;
   if (reduced) {
     input.reduced = &reduced_;
     input.material_of_reduced_point = &material_of_reduced_point_;
@@ -138,7 +138,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   if (adds_boundary) {
     PointMatrix load_x(3, static_cast<Index>(point_loads_.size()));
     for (std::size_t i = 0; i < point_loads_.size(); ++i) load_x.col(static_cast<Index>(i)) = point_loads_[i].x;
-    const auto load_shapes = point_shapes().evaluate_all(load_x, 0);
+    const auto load_shapes = shapes_->evaluate_all(load_x, 0, grow_at_points_);
     grown_boundary_points_ += count_grown(load_shapes);
     for (std::size_t i = 0; i < point_loads_.size(); ++i) {
       const auto& sv = load_shapes[i];

@@ -16,8 +16,8 @@ namespace lamina::efg {
 
 void EfgAnalysis::postprocess() {
   const Index n = problem_.cloud.size();
-  // the nodes include the body's edges and corners (point_shapes: see efg_analysis.hpp)
-  const auto values = point_shapes().evaluate_all(problem_.cloud.positions, 1);
+  // the nodes include the body's edges and corners (grow_at_points_: see efg_analysis.hpp)
+  const auto values = shapes_->evaluate_all(problem_.cloud.positions, 1, grow_at_points_);
   grown_boundary_points_ += count_grown(values);
   node_displacement_.resize(3, n);
   node_strain_.resize(6, n);
@@ -64,13 +64,13 @@ void EfgAnalysis::postprocess() {
 
 Vec3 EfgAnalysis::displacement_at(const Vec3& x) const {
   mls::ShapeFunctionValues sv;
-  point_shapes().evaluate(x, 0, sv);
+  shapes_->evaluate(x, 0, sv, grow_at_points_);
   return value_of(sv, u_);
 }
 
 material::Voigt EfgAnalysis::strain_at(const Vec3& x) const {
   mls::ShapeFunctionValues sv;
-  point_shapes().evaluate(x, 1, sv);
+  shapes_->evaluate(x, 1, sv, grow_at_points_);
   return material::strain_from_gradient(gradient_of(sv, u_));
 }
 

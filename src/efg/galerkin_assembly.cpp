@@ -38,8 +38,7 @@ struct FirstError {
 
 std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, const VolumeQuadrature& quadrature,
                                        VolumeIntegrals* integrals, std::vector<IndexList>* point_groups,
-                                       const CellFaceQuadrature* faces, const mls::MlsShapeFunctions* face_shapes) {
-  const mls::MlsShapeFunctions& at_faces = face_shapes ? *face_shapes : shapes;
+                                       const CellFaceQuadrature* faces, bool grow_at_faces) {
   const Index cells = static_cast<Index>(quadrature.cell_begin.size()) - 1;
   const Index n = shapes.node_count();
   std::vector<IndexList> result(static_cast<std::size_t>(cells));
@@ -85,7 +84,7 @@ std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, con
         }
         if (faces)
           for (Index f = faces->cell_begin[static_cast<std::size_t>(c)]; f < faces->cell_begin[static_cast<std::size_t>(c + 1)]; ++f) {
-            at_faces.neighbours(faces->faces.points.col(f), sv.neighbours);
+            shapes.neighbours(faces->faces.points.col(f), sv.neighbours, grow_at_faces);
             merged.clear();
             std::set_union(nodes.begin(), nodes.end(), sv.neighbours.begin(), sv.neighbours.end(), std::back_inserter(merged));
             nodes.swap(merged);
@@ -320,7 +319,7 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
         const Vec3 wn = faces.faces.weights[f] * faces.faces.normals.col(f);
         const Eigen::Vector4d p = linear_fields(x);
         defect.noalias() += p * wn.transpose();
-        (in.face_shapes ? in.face_shapes : in.shapes)->evaluate(x, 0, s);
+        in.shapes->evaluate(x, 0, s, in.grow_at_faces);
         if (s.remedy_steps > 0) {
 #pragma omp atomic
           ++grown_face_points;

@@ -61,12 +61,11 @@ struct VolumeIntegrals {
 /// `integrals` also the volume integrals of phi_I and grad phi_I (for VCI); with `point_groups` the
 /// distinct neighbour lists of the points (appended, cell by cell): two nodes couple in K only if
 /// some quadrature point sees both, which is sparser than the cell unions.
-/// With `faces` the neighbours of each cell's face points join its union (gradient smoothing), found by
-/// `face_shapes` if given (else `shapes`).
+/// With `faces` the neighbours of each cell's face points join its union (gradient smoothing), found with the
+/// singular remedy if `grow_at_faces` (as assemble_volume evaluates them).
 std::vector<IndexList> cell_neighbours(const mls::MlsShapeFunctions& shapes, const VolumeQuadrature& quadrature,
                                        VolumeIntegrals* integrals, std::vector<IndexList>* point_groups = nullptr,
-                                       const CellFaceQuadrature* faces = nullptr,
-                                       const mls::MlsShapeFunctions* face_shapes = nullptr);
+                                       const CellFaceQuadrature* faces = nullptr, bool grow_at_faces = false);
 
 /// VCI correction xi_I (3 x N) from the volume integrals and the boundary integrals sum_s phi_I n w_s.
 Eigen::Matrix3Xd vci_correction(const VolumeIntegrals& volume, const Eigen::Matrix3Xd& boundary);
@@ -86,9 +85,9 @@ struct VolumeAssembly {
   /// Gradient smoothing over the cells (correction `smoothed`): the faces of every cell. The cell
   /// node lists must hold the face points' neighbours and the pattern must couple every pair of them.
   const CellFaceQuadrature* smoothing = nullptr;
-  /// The shape functions at the face points (none: `shapes`); EfgAnalysis gives them the singular remedy,
-  /// since face points lie on the body's boundary edges, where a small support can leave A singular.
-  const mls::MlsShapeFunctions* face_shapes = nullptr;
+  /// The face points with the singular remedy (SINCHECK): they lie on the body's boundary edges too, where a
+  /// small support can leave A singular (EfgAnalysis sets it).
+  bool grow_at_faces = false;
   /// Distributed assembly: this call adds the cells of slab `part` of `parts` (contiguous slabs of the
   /// cells sorted along the body's longest axis); the parts of all ranks add up to the whole.
   int part = 0, parts = 1;
@@ -96,7 +95,7 @@ struct VolumeAssembly {
 
 struct VolumeAssemblyReport {
   bool direct = true;  // the threads added straight into `values` (no per-thread copies)
-  Index grown_face_points = 0;  // smoothing's face-point evaluations where face_shapes grew the support
+  Index grown_face_points = 0;  // smoothing's face-point evaluations where the support grew (grow_at_faces)
 };
 
 /// Pass 2: adds the volume stiffness to values (pattern.nonzeros() entries in pattern order, for

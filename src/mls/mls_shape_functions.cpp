@@ -495,7 +495,7 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
 }
 
 template <int Dim, Basis B, bool Enriched>
-bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, ShapeFunctionValues& out) const {
+bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, bool remedy, ShapeFunctionValues& out) const {
   using Polynomial = PolynomialBasis<Dim, B>;
   constexpr int P = Polynomial::size;           // polynomial terms
   constexpr int M = P + (Enriched ? 1 : 0);     // + the interface term |d(y)| / rho_n
@@ -574,8 +574,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     if constexpr (Enriched) return false;  // the caller falls back to the polynomial basis
     // Nothing more to gain once every node is a neighbour (radius modes) or N = all nodes.
     const bool can_grow = node_centred_mode ? n < node_count() : nearest_count < node_count();
-    if (!options_.singular_remedy || step >= options_.remedy_max_steps || !can_grow)
-      throw_singular(x_in, n, condition);
+    if (!remedy || step >= options_.remedy_max_steps || !can_grow) throw_singular(x_in, n, condition, remedy);
     ++step;
     if (node_centred_mode) radius_factor *= 1.25;
     else ++nearest_count;
@@ -609,7 +608,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     transform_rows(transform);
     MomentMatrixFactor<M> second;
     weighted_gram<M>(basis, weight(0), scratch, a);
-    if (!second.factor(a, options_.max_condition)) throw_singular(x_in, n, out.condition);
+    if (!second.factor(a, options_.max_condition)) throw_singular(x_in, n, out.condition, remedy);
     transform_rows(second.transform());
     transform = (second.transform().lazyProduct(transform)).eval();
   }
@@ -681,7 +680,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   return true;
 }
 
-void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real condition) const {
+void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real condition, bool remedy) const {
   const int dimension = options_.dimension;
   std::string cause;
   if (neighbours < basis_size_) {
@@ -711,7 +710,7 @@ void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real con
       break;
   }
   if (options_.basis == Basis::quadratic) advice += ", use a linear basis";
-  advice += options_.singular_remedy
+  advice += remedy
                 ? fmt::format(" (the singular remedy gave up after {} steps)", options_.remedy_max_steps)
                 : ", or enable the singular remedy";
   const std::string message = fmt::format(
@@ -723,17 +722,18 @@ void MlsShapeFunctions::throw_singular(const Vec3& x, Index neighbours, Real con
 }
 
 template <int Dim>
-void MlsShapeFunctions::evaluate_dimension(const Vec3& x, int derivative_order, bool enrich, ShapeFunctionValues& out) const {
+void MlsShapeFunctions::evaluate_dimension(const Vec3& x, int derivative_order, bool enrich, bool remedy,
+                                           ShapeFunctionValues& out) const {
   if (options_.basis == Basis::linear) {
-    if (!enrich || !evaluate_kernel<Dim, Basis::linear, true>(x, derivative_order, out))
-      evaluate_kernel<Dim, Basis::linear, false>(x, derivative_order, out);
+    if (!enrich || !evaluate_kernel<Dim, Basis::linear, true>(x, derivative_order, remedy, out))
+      evaluate_kernel<Dim, Basis::linear, false>(x, derivative_order, remedy, out);
   } else {
-    if (!enrich || !evaluate_kernel<Dim, Basis::quadratic, true>(x, derivative_order, out))
-      evaluate_kernel<Dim, Basis::quadratic, false>(x, derivative_order, out);
+    if (!enrich || !evaluate_kernel<Dim, Basis::quadratic, true>(x, derivative_order, remedy, out))
+      evaluate_kernel<Dim, Basis::quadratic, false>(x, derivative_order, remedy, out);
   }
 }
 
-void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const {
+void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunctionValues& out, bool grow_if_singular) const {
   if (derivative_order < 0 || derivative_order > 2)
     throw std::invalid_argument(fmt::format("MLS derivative order must be 0, 1 or 2, got {}", derivative_order));
   // interface enrichment where the support may cross the interface plane
@@ -742,17 +742,18 @@ void MlsShapeFunctions::evaluate(const Vec3& x, int derivative_order, ShapeFunct
     const Real reach = node_centred() ? options_.interface_normal.cwiseAbs().dot(max_radius_) : std::numeric_limits<Real>::infinity();
     enrich = std::abs(options_.interface_normal.dot(x - options_.interface_point)) < reach;
   }
+  const bool remedy = options_.singular_remedy || grow_if_singular;
   switch (options_.dimension) {
-    case 1: return evaluate_dimension<1>(x, derivative_order, enrich, out);
-    case 2: return evaluate_dimension<2>(x, derivative_order, enrich, out);
-    default: return evaluate_dimension<3>(x, derivative_order, enrich, out);
+    case 1: return evaluate_dimension<1>(x, derivative_order, enrich, remedy, out);
+    case 2: return evaluate_dimension<2>(x, derivative_order, enrich, remedy, out);
+    default: return evaluate_dimension<3>(x, derivative_order, enrich, remedy, out);
   }
 }
 
-void MlsShapeFunctions::neighbours(const Vec3& x_in, IndexList& out) const {
-  if (options_.singular_remedy) {
+void MlsShapeFunctions::neighbours(const Vec3& x_in, IndexList& out, bool grow_if_singular) const {
+  if (options_.singular_remedy || grow_if_singular) {
     ShapeFunctionValues values;
-    evaluate(x_in, 0, values);
+    evaluate(x_in, 0, values, grow_if_singular);
     out.swap(values.neighbours);
     return;
   }
@@ -773,7 +774,8 @@ ShapeFunctionValues MlsShapeFunctions::evaluate(const Vec3& x, int derivative_or
   return out;
 }
 
-std::vector<ShapeFunctionValues> MlsShapeFunctions::evaluate_all(const PointMatrix& points, int derivative_order) const {
+std::vector<ShapeFunctionValues> MlsShapeFunctions::evaluate_all(const PointMatrix& points, int derivative_order,
+                                                                 bool grow_if_singular) const {
   if (derivative_order < 0 || derivative_order > 2)
     throw std::invalid_argument(fmt::format("MLS derivative order must be 0, 1 or 2, got {}", derivative_order));
   const Index count = points.cols();
@@ -783,7 +785,7 @@ std::vector<ShapeFunctionValues> MlsShapeFunctions::evaluate_all(const PointMatr
 #pragma omp parallel for schedule(dynamic, 64)
   for (Index i = 0; i < count; ++i) {
     try {
-      evaluate(points.col(i), derivative_order, results[static_cast<std::size_t>(i)]);
+      evaluate(points.col(i), derivative_order, results[static_cast<std::size_t>(i)], grow_if_singular);
     } catch (...) {
 #pragma omp critical(lamina_mls_evaluate_all)
       {

@@ -59,18 +59,20 @@ class MlsShapeFunctions {
 
   /// Shape functions at x with derivatives up to derivative_order (0, 1 or 2).
   /// Throws SingularMomentMatrix if A(x) is singular or its condition exceeds options.max_condition
-  /// (after the SINCHECK remedy if enabled); std::invalid_argument for another derivative_order.
-  void evaluate(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
+  /// (after the SINCHECK remedy if enabled, or if grow_if_singular asks for it at this point);
+  /// std::invalid_argument for another derivative_order.
+  void evaluate(const Vec3& x, int derivative_order, ShapeFunctionValues& out, bool grow_if_singular = false) const;
   ShapeFunctionValues evaluate(const Vec3& x, int derivative_order) const;
 
   /// The sorted neighbour list evaluate() would return at x, without the shape functions (a support
   /// search only; with the singular remedy enabled a full evaluation, since the remedy may widen the
   /// support). Does not check the moment matrix.
-  void neighbours(const Vec3& x, IndexList& out) const;
+  void neighbours(const Vec3& x, IndexList& out, bool grow_if_singular = false) const;
 
   /// evaluate() at every column of points, in parallel (OpenMP), results in the order of the points.
   /// Deterministic; if points fail, the error of the lowest failing column is rethrown.
-  std::vector<ShapeFunctionValues> evaluate_all(const PointMatrix& points, int derivative_order) const;
+  std::vector<ShapeFunctionValues> evaluate_all(const PointMatrix& points, int derivative_order,
+                                                bool grow_if_singular = false) const;
 
   /// Convenience: u^h, grad u^h and (derivative_order 2) the Hessian of a nodal field (N values) at x.
   FieldValue approximate(const Vec3& x, const Eigen::Ref<const Eigen::VectorXd>& nodal_values,
@@ -94,16 +96,16 @@ class MlsShapeFunctions {
   /// the enriched moment matrix is ill-conditioned (the caller then uses the polynomial basis).
   /// The kernel for the options' basis in Dim dimensions, enriched first if `enrich`.
   template <int Dim>
-  void evaluate_dimension(const Vec3& x, int derivative_order, bool enrich, ShapeFunctionValues& out) const;
+  void evaluate_dimension(const Vec3& x, int derivative_order, bool enrich, bool remedy, ShapeFunctionValues& out) const;
   template <int Dim, Basis B, bool Enriched>
-  bool evaluate_kernel(const Vec3& x, int derivative_order, ShapeFunctionValues& out) const;
+  bool evaluate_kernel(const Vec3& x, int derivative_order, bool remedy, ShapeFunctionValues& out) const;
   bool node_centred() const;
   /// Fills workspace.indices (sorted), .offsets (x - x_I) and .inverse_radii of the neighbours of x
   /// (x already projected), radii multiplied by radius_factor, N = nearest_count; sets rho (basis scale).
   template <int Dim>
   Index gather(const Vec3& x, Real radius_factor, Index nearest_count, detail::MlsWorkspace& workspace,
                Vec3& rho) const;
-  [[noreturn]] void throw_singular(const Vec3& x, Index neighbours, Real condition) const;
+  [[noreturn]] void throw_singular(const Vec3& x, Index neighbours, Real condition, bool remedy) const;
 
   PointMatrix nodes_;             // as given
   PointMatrix projected_;         // unused dimensions zeroed
