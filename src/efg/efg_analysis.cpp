@@ -569,7 +569,9 @@ void EfgAnalysis::record_solver_report() {
   timings_["solver_residual"] = solver_report_.residual;
   timings_["solver_backward_error"] = solver_report_.backward_error;
   timings_["solver_rcond"] = solver_report_.rcond;
+  // which factorisation: CHOLMOD (sparse) or dense (a small, nearly full K); both Cholesky
   timings_["solver_cholmod"] = solver_report_.method == "cholmod_supernodal_llt" ? 1.0 : 0.0;
+  timings_["solver_dense"] = solver_report_.method == "dense_llt" ? 1.0 : 0.0;
 }
 
 }  // namespace lamina::efg

@@ -18,7 +18,7 @@
 #include "pd/lean_peridynamic_solid.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
-#include "solve/cholmod_llt.hpp"
+#include "solve/sparse_cholesky.hpp"
 #include "solve/petsc_linear_solver.hpp"
 #include "solve/slepc_eigen_solver.hpp"
 
@@ -48,16 +48,14 @@ solve::SparseMatrix reduce_upper(const solve::SparseMatrix& upper, const std::ve
 class CholmodRegularInverse {
  public:
   using Scalar = Real;
-  explicit CholmodRegularInverse(const solve::SparseMatrix& upper) : upper_(upper) {
-    llt_.compute(upper_);
-    ok_ = llt_.info() == Eigen::Success;
-  }
+  explicit CholmodRegularInverse(const solve::SparseMatrix& upper)
+      : upper_(upper), llt_(solve::make_sparse_cholesky()), ok_(llt_->compute(upper_)) {}
   bool ok() const { return ok_; }
   Index rows() const { return upper_.rows(); }
   Index cols() const { return upper_.cols(); }
   void solve(const Scalar* x_in, Scalar* y_out) const {
     const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
-    Eigen::Map<Eigen::VectorXd>(y_out, rows()) = llt_.solve(x);
+    Eigen::Map<Eigen::VectorXd>(y_out, rows()) = llt_->solve(x);
   }
   void perform_op(const Scalar* x_in, Scalar* y_out) const {
     const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
@@ -66,7 +64,7 @@ class CholmodRegularInverse {
 
  private:
   const solve::SparseMatrix& upper_;
-  solve::CholmodLlt llt_;
+  std::unique_ptr<solve::SparseCholesky> llt_;
   bool ok_ = false;
 };
 

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "pd/peridynamic_model.hpp"
-#include "solve/cholmod_llt.hpp"
+#include "solve/sparse_cholesky.hpp"
 
 namespace lamina::pd {
 
@@ -38,16 +38,15 @@ ZeroEnergyReport find_zero_energy_modes(const solve::SparseMatrix& reduced_upper
   if (m == 0) return report;
   const Eigen::VectorXd scale = (0.25 * absolute_row_sums(reduced_upper)).cwiseMax(1e-300).cwiseInverse().cwiseSqrt();
   solve::SparseMatrix scaled = scale.asDiagonal() * reduced_upper * scale.asDiagonal();
-  solve::CholmodLlt llt;  // a failed factorisation is an answer here, not a warning (no CHOLMOD printing)
-  llt.compute(scaled);
+  // a failed factorisation is an answer here, not a warning (CHOLMOD prints nothing)
+  const std::unique_ptr<solve::SparseCholesky> llt = solve::make_sparse_cholesky();
   Eigen::VectorXd mode;
-  if (llt.info() != Eigen::Success) {
+  if (!llt->compute(scaled)) {
     // singular: shift by the threshold and take the lowest mode of the shifted matrix
     solve::SparseMatrix shifted = scaled;
     for (Index k = 0; k < m; ++k) shifted.coeffRef(k, k) += 10 * threshold;
-    llt.compute(shifted);
     report.singular = true;
-    if (llt.info() != Eigen::Success) return report;  // cannot classify
+    if (!llt->compute(shifted)) return report;  // cannot classify
   }
   // inverse iteration from a deterministic start
   Eigen::VectorXd x(m);
@@ -55,7 +54,7 @@ ZeroEnergyReport find_zero_energy_modes(const solve::SparseMatrix& reduced_upper
   x.normalize();
   Real estimate = 0;
   for (int it = 0; it < 40; ++it) {
-    Eigen::VectorXd y = llt.solve(x);
+    Eigen::VectorXd y = llt->solve(x);
     const Real norm = y.norm();
     if (!(norm > 0) || !std::isfinite(norm)) break;
     const Real next = 1.0 / norm;  // |K^-1 x| ~ 1 / lambda_min

@@ -13,53 +13,14 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
-#include "core/memory.hpp"
 #include "core/stopwatch.hpp"
-#include "solve/cholmod_llt.hpp"
+#include "solve/sparse_cholesky.hpp"
+#include "solve/dense_cholesky.hpp"
 
 namespace lamina::solve {
 
 namespace {
 
-// CHOLMOD allocates its factor and workspace through SuiteSparse_config. Large blocks are advised for
-// huge pages before their first touch (see core/memory.hpp): on this kind of machine 4 KiB page
-// faults were a large part of the factorisation time.
-constexpr std::size_t huge_allocation = std::size_t{4} << 20;
-
-void* malloc_advised(std::size_t bytes) {
-  void* p = std::malloc(bytes);
-  if (bytes >= huge_allocation) advise_huge_pages(p, bytes);
-  return p;
-}
-
-void* calloc_advised(std::size_t count, std::size_t size) {
-  const std::size_t bytes = count * size;
-  if (size != 0 && bytes / size != count) return nullptr;
-  if (bytes < huge_allocation) return std::calloc(count, size);
-  void* p = std::malloc(bytes);
-  if (!p) return nullptr;
-  advise_huge_pages(p, bytes);
-  std::memset(p, 0, bytes);
-  return p;
-}
-
-void* realloc_advised(void* old, std::size_t bytes) {
-  void* p = std::realloc(old, bytes);
-  if (bytes >= huge_allocation) advise_huge_pages(p, bytes);
-  return p;
-}
-
-/// Installs the allocators above once, before the first factorisation (single-threaded caller).
-void install_cholmod_allocators() {
-  static const bool installed = [] {
-    SuiteSparse_config.malloc_func = malloc_advised;
-    SuiteSparse_config.calloc_func = calloc_advised;
-    SuiteSparse_config.realloc_func = realloc_advised;
-    SuiteSparse_config.free_func = std::free;
-    return true;
-  }();
-  (void)installed;
-}
 
 Real relative_residual(const Eigen::VectorXd& r, const Eigen::VectorXd& b) {
   const Real nb = b.norm();
@@ -133,26 +94,27 @@ Eigen::VectorXd solve_symmetric(const SparseMatrix& upper, const Eigen::VectorXd
   if (upper.rows() == 0) return Eigen::VectorXd();
   Eigen::VectorXd x;
   if (!options.force_fallback) {
-    install_cholmod_allocators();
+    // dense for a small, nearly full K (solve/dense_cholesky.hpp), else CHOLMOD (loaded on first use)
+    const bool dense = dense_cholesky_pays(upper);
     auto start = std::chrono::steady_clock::now();
-    CholmodLlt llt;  // AMD or METIS ordering, no CHOLMOD printing (solve/cholmod_llt.hpp)
+    const std::unique_ptr<SparseCholesky> llt = dense ? std::make_unique<DenseCholesky>() : make_sparse_cholesky();
     const int saved_threads = omp_get_max_threads();
     if (options.factor_threads > 0) omp_set_num_threads(std::min(options.factor_threads, saved_threads));
-    llt.compute(upper);
+    const bool factored = llt->compute(upper);
     omp_set_num_threads(saved_threads);
     report.factor_seconds = seconds_since(start);
-    if (llt.info() == Eigen::Success) {
-      report.rcond = llt.rcond();
+    if (factored) {
+      report.rcond = llt->rcond();
       if (!(report.rcond > options.min_rcond)) singular(fmt::format("Cholesky pivot ratio estimate {:.3g}", report.rcond));
       start = std::chrono::steady_clock::now();
-      x = llt.solve(b);
+      x = llt->solve(b);
       if (x.allFinite())
         refine(x, b, norm_symmetric_upper(upper), [&](const Eigen::VectorXd& v) { return multiply_symmetric_upper(upper, v); },
-               [&](const Eigen::VectorXd& r) -> Eigen::VectorXd { return llt.solve(r); }, 2);
+               [&](const Eigen::VectorXd& r) -> Eigen::VectorXd { return llt->solve(r); }, 2);
       report.solve_seconds = seconds_since(start);
-      report.method = "cholmod_supernodal_llt";
+      report.method = dense ? "dense_llt" : "cholmod_supernodal_llt";
     } else {
-      report.note = "CHOLMOD: matrix not positive definite";
+      report.note = dense ? "dense Cholesky: matrix not positive definite" : "CHOLMOD: matrix not positive definite";
       if (!options.allow_fallback)
         singular("not positive definite; with Nitsche boundary conditions increase efg.nitsche.factor");
     }

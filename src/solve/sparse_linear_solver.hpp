@@ -2,9 +2,11 @@
 // Direct solution of the sparse linear systems of the static methods.
 //
 //   solve_symmetric: K x = b with K symmetric, given by its upper triangle (column-major).
-//     1. CHOLMOD supernodal Cholesky (Eigen::CholmodSupernodalLLT; CHOLMOD orders with both AMD and
+//     1. CHOLMOD supernodal Cholesky (solve/sparse_cholesky.hpp; CHOLMOD orders with both AMD and
 //        METIS and keeps the sparser factor). Accepted when the factorisation succeeds and the reciprocal condition estimate
-//        of the factor (cholmod_rcond: (min diag L / max diag L)^2) is above `min_rcond`.
+//        of the factor (cholmod_rcond: (min diag L / max diag L)^2) is above `min_rcond`. A small, nearly
+//        full K (at most 2000 rows, at least half of the triangle stored) is factored dense instead
+//        (solve/dense_cholesky.hpp), accepted and checked the same way.
 //     2. Otherwise (not positive definite): Eigen::SimplicialLDLT as the fallback (indefinite
 //        symmetric systems without pivoting).
 //   solve_general: A x = b with A square and unsymmetric (or a symmetric saddle-point system):
@@ -25,12 +27,12 @@ namespace lamina::solve {
 using SparseMatrix = Eigen::SparseMatrix<Real, Eigen::ColMajor, int>;
 
 struct SolverReport {
-  std::string method;       // "cholmod_supernodal_llt", "simplicial_ldlt", "sparse_lu"
+  std::string method;       // "dense_llt", "cholmod_supernodal_llt", "simplicial_ldlt", "sparse_lu"
   Index rows = 0;
   Index nonzeros = 0;       // stored entries (upper triangle for symmetric systems)
   Real factor_seconds = 0;  // analysis + factorisation
   Real solve_seconds = 0;
-  Real rcond = 0;           // reciprocal condition estimate (CHOLMOD only; 0 otherwise)
+  Real rcond = 0;           // reciprocal condition estimate (Cholesky only; 0 otherwise)
   Real residual = 0;        // |A x - b| / |b|
   Real backward_error = 0;  // |A x - b|_inf / (|A|_inf |x|_inf + |b|_inf)
   std::string note;         // why a fallback was used
@@ -44,7 +46,7 @@ struct SolverOptions {
   /// solve is treated as singular. Ill-conditioned but sound systems stay far below (the thin
   /// cantilever 2000 x 2 x 2 at 101 x 5 x 5 nodes: 1.5e-3).
   Real max_relative_residual = 1e-2;
-  /// OpenMP threads of the CHOLMOD factorisation (0: all). Its parallel regions copy update matrices
+  /// OpenMP threads of the Cholesky factorisation (0: all). Its parallel regions copy update matrices
   /// and are memory-bound: on the 2-core reference machine one thread factors the 41 x 41 x 5 EFG
   /// plate (25k dofs, 7.8M stored entries) in 3.7 s, two threads in 5.8 s.
   int factor_threads = 1;
