@@ -1,9 +1,10 @@
-// Sparse building blocks: block pattern positions and scatter, CHOLMOD / LDLT / LU solves and
-// their singularity detection.
+// Sparse building blocks: block pattern positions and scatter, CHOLMOD / dense Cholesky / LDLT / LU
+// solves and their singularity detection.
 #include <gtest/gtest.h>
 
 #include "core/error.hpp"
 #include "solve/block_pattern.hpp"
+#include "solve/sparse_cholesky.hpp"
 #include "solve/sparse_linear_solver.hpp"
 
 namespace lamina::solve {
@@ -63,6 +64,48 @@ TEST(SparseSolver, CholmodSolvesAnSpdSystem) {
   const Eigen::VectorXd y = solve_symmetric(k, b, r, o);
   EXPECT_EQ(r.method, "simplicial_ldlt");
   EXPECT_LT((y - x0).norm(), 1e-10 * x0.norm());
+}
+
+/// Upper triangle of B B^T + shift I for a deterministic n x r matrix B (full, symmetric positive
+/// semi-definite; definite for shift > 0 or r >= n).
+SparseMatrix full_gram_upper(int n, int r, Real shift) {
+  Eigen::MatrixXd b(n, r);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < r; ++j) b(i, j) = std::sin(0.37 * (i + 1) * (j + 2)) + (i == j ? 2.0 : 0.0);
+  const Eigen::MatrixXd k = b * b.transpose() + shift * Eigen::MatrixXd::Identity(n, n);
+  const Eigen::MatrixXd upper = k.triangularView<Eigen::Upper>();
+  return upper.sparseView();
+}
+
+TEST(SparseSolver, SmallFullSystemIsFactoredDenseWithCholmodsConditionEstimate) {
+  const int n = 40;
+  const SparseMatrix k = full_gram_upper(n, n, 0.1);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::LinSpaced(n, -1, 2);
+  const Eigen::VectorXd b = multiply_symmetric_upper(k, x0);
+  SolverReport r;
+  const Eigen::VectorXd x = solve_symmetric(k, b, r);
+  EXPECT_EQ(r.method, "dense_llt");
+  EXPECT_LT((x - x0).norm(), 1e-10 * x0.norm());
+  // the estimate is CHOLMOD's formula, (min diag L / max diag L)^2; CHOLMOD factors a permuted K, so
+  // its value on the same matrix differs, but by less than a factor n here (both far from singular)
+  const auto cholmod = make_sparse_cholesky();
+  ASSERT_TRUE(cholmod->compute(k));
+  EXPECT_GT(r.rcond, 0.0);
+  EXPECT_LT(r.rcond, 1.0);
+  EXPECT_LT(std::abs(std::log10(r.rcond / cholmod->rcond())), std::log10(static_cast<Real>(n)));
+  EXPECT_LT((cholmod->solve(b) - x0).norm(), 1e-10 * x0.norm());
+  // a sparse (banded) system of the same size stays with CHOLMOD
+  solve_symmetric(laplacian_upper(n, 0.01), b, r);
+  EXPECT_EQ(r.method, "cholmod_supernodal_llt");
+}
+
+TEST(SparseSolver, SingularFullSystemIsReported) {
+  // rank n - 1: a zero-energy mode in a full matrix (the dense path)
+  const int n = 20;
+  const SparseMatrix k = full_gram_upper(n, n - 1, 0.0);
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(n);
+  SolverReport r;
+  EXPECT_THROW(solve_symmetric(k, b, r), AnalysisError);
 }
 
 TEST(SparseSolver, SingularSystemIsReported) {
