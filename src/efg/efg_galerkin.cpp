@@ -199,7 +199,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   }
 
   // constraint terms
-  Eigen::MatrixXd Kc;
+  Eigen::MatrixXd Kc, n_columns, v_columns;
   Eigen::VectorXd fc;
   auto& multiplier_entries = system.multiplier_entries;
   Eigen::VectorXd& multiplier_rhs = system.multiplier_rhs;
@@ -229,21 +229,30 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       const Index size = 3 * static_cast<Index>(group.neighbours.size());
       Kc.setZero(size, size);
       fc.setZero(size);
-      std::size_t j = i;
-      for (; j < constraint_points_.size() && constraint_shapes[j].neighbours == group.neighbours; ++j) {
+      std::size_t end = i;
+      while (end < constraint_points_.size() && constraint_shapes[end].neighbours == group.neighbours) ++end;
+      // Nitsche: the group's columns n, v (at most 3 a point), then K += N V^T + V N^T in two products
+      const Index most_columns = 3 * static_cast<Index>(end - i);
+      if (n_columns.rows() != size || n_columns.cols() < most_columns) {
+        n_columns.resize(size, most_columns);
+        v_columns.resize(size, most_columns);
+      }
+      Index columns = 0;
+      for (std::size_t j = i; j < end; ++j) {
         const auto& p = constraint_points_[j];
         const auto& sv = constraint_shapes[j];
         if (options.essential == EssentialMethod::nitsche && p.surface) {
           const auto& mat = materials_[static_cast<std::size_t>(p.material)];
           const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
-          nitsche_terms(sv, p, mat, beta, Kc, fc, pattern.symmetric());
+          columns = nitsche_columns(sv, p, mat, beta, n_columns, v_columns, columns, fc);
         } else {
           penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
         }
       }
+      add_nitsche_products(n_columns, v_columns, columns, Kc, pattern.symmetric());
       pattern.scatter(group.neighbours, Kc, values);
       scatter_vector(group, fc, f);
-      i = j;
+      i = end;
     }
   }
   timings_["assembly_boundary_s"] = seconds_since(start);
@@ -321,7 +330,7 @@ void EfgAnalysis::galerkin_energies() {
       const auto& mat = materials_[static_cast<std::size_t>(p.material)];
       const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
       const Vec3 t = material::traction(mat.stress(material::strain_from_gradient(gradient_of(sv, u_))), p.normal);
-      // u^T K_c u of nitsche_terms' K_c = sum over held a of w (-2 u_a t_a(u) + beta u_a^2), t = T u
+      // u^T K_c u of the Nitsche K_c (add_nitsche_products) = sum over held a of w (-2 u_a t_a(u) + beta u_a^2), t = T u
       for (int a = 0; a < 3; ++a)
         if (p.constrained[static_cast<std::size_t>(a)]) {
           r[a] = p.weight * (t[a] - beta * (uh[a] - p.value[a]));

@@ -29,22 +29,36 @@ void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p,
   }
 }
 
-void nitsche_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
-                   Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f, bool upper_only) {
+Index nitsche_columns(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
+                      Real beta, Eigen::MatrixXd& n_columns, Eigen::MatrixXd& v_columns, Index column, Eigen::VectorXd& f) {
   const Index m = static_cast<Index>(sv.neighbours.size());
   const auto T = traction_operator(sv, material, p.normal);
   const Real w = p.weight;
-  Eigen::VectorXd n(3 * m), v(3 * m);
   for (int a = 0; a < 3; ++a) {
     if (!p.constrained[static_cast<std::size_t>(a)]) continue;
-    // N_a(3k + a) = phi_k: the terms of component a are n v^T + v n^T with v = -w T_a^T + (w beta / 2) n
+    auto n = n_columns.col(column);
+    auto v = v_columns.col(column);
     n.setZero();
     for (Index k = 0; k < m; ++k) n[3 * k + a] = sv.phi[k];
     v = -w * T.row(a).transpose() + (0.5 * w * beta) * n;
-    K.selfadjointView<Eigen::Upper>().rankUpdate(n, v);
     f += (w * beta * p.value[a]) * n - (w * p.value[a]) * T.row(a).transpose();
+    ++column;
   }
-  if (!upper_only) K.triangularView<Eigen::StrictlyLower>() = K.transpose();
+  return column;
+}
+
+void add_nitsche_products(const Eigen::MatrixXd& n_columns, const Eigen::MatrixXd& v_columns, Index columns,
+                          Eigen::MatrixXd& K, bool upper_only) {
+  if (columns == 0) return;
+  const auto n = n_columns.leftCols(columns);
+  const auto v = v_columns.leftCols(columns);
+  if (upper_only) {
+    K.triangularView<Eigen::Upper>() += n * v.transpose();
+    K.triangularView<Eigen::Upper>() += v * n.transpose();
+  } else {
+    K.noalias() += n * v.transpose();
+    K.noalias() += v * n.transpose();
+  }
 }
 
 }  // namespace lamina::efg

@@ -62,10 +62,18 @@ Eigen::Matrix<Real, 3, Eigen::Dynamic> traction_operator(const mls::ShapeFunctio
 void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, Real alpha, Eigen::MatrixXd& K,
                    Eigen::VectorXd& f);
 
-/// Nitsche terms of one surface point: K += w (-N^T S T - T^T S N + beta N^T S N),
-/// f += w (-T^T S u-bar + beta N^T S u-bar) (K and f sized and zeroed by the caller, as for penalty_terms).
-/// upper_only: K's upper triangle only (what a symmetric BlockPattern::scatter reads).
-void nitsche_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
-                   Real beta, Eigen::MatrixXd& K, Eigen::VectorXd& f, bool upper_only = false);
+/// Nitsche terms of the surface points of a group that share their neighbours (a boundary cell face):
+/// K += w (-N^T S T - T^T S N + beta N^T S N), f += w (-T^T S u-bar + beta N^T S u-bar) summed over the
+/// points (K: 3m x 3m and f: 3m, sized and zeroed by the caller, as for penalty_terms), formed as
+/// matrix products: K = sum over points and held components a of (n v^T + v n^T) with n = N_a^T and
+/// v = -w T_a^T + (w beta / 2) n. nitsche_columns writes the point's n and v as columns of `n_columns`
+/// and `v_columns` from `column` on (3m rows; at most 3 columns a point) and adds its f; it returns the
+/// next free column. add_nitsche_products adds N V^T + V N^T over the first `columns` columns to K
+/// (upper triangle only if upper_only): two matrix-matrix products instead of one rank-2 update of
+/// the whole block per point and component.
+Index nitsche_columns(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
+                      Real beta, Eigen::MatrixXd& n_columns, Eigen::MatrixXd& v_columns, Index column, Eigen::VectorXd& f);
+void add_nitsche_products(const Eigen::MatrixXd& n_columns, const Eigen::MatrixXd& v_columns, Index columns,
+                          Eigen::MatrixXd& K, bool upper_only);
 
 }  // namespace lamina::efg
