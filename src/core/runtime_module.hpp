@@ -11,4 +11,25 @@ namespace lamina {
 /// then stays loaded), or nullptr with the reason in `why` (not found, dlerror(), or no such symbol).
 void* open_runtime_module(const char* file_name, const char* build_path, const char* symbol, std::string& why);
 
+/// The table of functions a module's entry point `symbol` (a function returning const Table*) hands out,
+/// checked against this build's interface version `abi` (Table::abi); nullptr with the reason in `why`
+/// if the module cannot be opened, returns nothing, or is from another build.
+template <class Table>
+const Table* open_module_table(const char* file_name, const char* build_path, const char* symbol, int abi, std::string& why) {
+  using EntryPoint = const Table* (*)();
+  const auto entry = reinterpret_cast<EntryPoint>(open_runtime_module(file_name, build_path, symbol, why));
+  if (!entry) return nullptr;
+  const Table* table = entry();
+  if (!table) {
+    why = "its entry point returned nothing";
+    return nullptr;
+  }
+  if (table->abi != abi) {
+    why = "it is from another lamina build (interface version " + std::to_string(table->abi) + ", expected " +
+          std::to_string(abi) + ")";
+    return nullptr;
+  }
+  return table;
+}
+
 }  // namespace lamina

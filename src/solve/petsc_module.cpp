@@ -11,8 +11,6 @@ namespace lamina::solve {
 
 namespace {
 
-using EntryPoint = const PetscSolvers* (*)();
-
 /// The module, loaded once per process. On loading, its finalize is registered to run before this
 /// program's MPI_Finalize (parallel::Environment) or at exit where there is none (Python).
 const PetscSolvers& solvers() {
@@ -21,16 +19,10 @@ const PetscSolvers& solvers() {
   std::lock_guard<std::mutex> lock(mutex);
   if (table) return *table;
   std::string why;
-  const auto entry = reinterpret_cast<EntryPoint>(
-      open_runtime_module(LAMINA_PETSC_SOLVERS_NAME, LAMINA_PETSC_SOLVERS_PATH, "lamina_petsc_solvers", why));
-  const PetscSolvers* loaded = entry ? entry() : nullptr;
-  if (entry && !loaded) why = "its entry point returned no solvers";
-  if (loaded && loaded->abi != petsc_solvers_abi)
-    why = "it is from another lamina build (interface version " + std::to_string(loaded->abi) + ", expected " +
-          std::to_string(petsc_solvers_abi) + ")";
-  if (!loaded || loaded->abi != petsc_solvers_abi)
+  table = open_module_table<PetscSolvers>(LAMINA_PETSC_SOLVERS_NAME, LAMINA_PETSC_SOLVERS_PATH, "lamina_petsc_solvers",
+                                          petsc_solvers_abi, why);  // the module stays loaded until the process ends
+  if (!table)
     throw SolverUnavailable("the PETSc solvers module " + std::string(LAMINA_PETSC_SOLVERS_NAME) + " could not be loaded: " + why);
-  table = loaded;  // the module stays loaded until the process ends
   parallel::Environment::before_finalize([] { table->finalize(); });
   std::atexit([] { table->finalize(); });
   return *table;
