@@ -15,7 +15,8 @@ namespace lamina::solve {
 bool dense_cholesky_pays(const SparseMatrix& upper);
 inline constexpr Index dense_cholesky_max_rows = 2000;  // 32 MB of dense storage
 
-/// K = L L^T of the symmetric matrix given by its upper triangle, stored dense.
+/// K = L L^T of the symmetric matrix given by its (sparse) upper triangle, the factor stored dense: the
+/// SparseCholesky interface, so that solve_symmetric treats both factorisations alike.
 class DenseCholesky final : public SparseCholesky {
  public:
   /// Factors; false if K is not positive definite (a pivot <= 0).

@@ -7,20 +7,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
+#include <memory>
 
 #include <fmt/format.h>
 
 #include "core/error.hpp"
 #include "core/stopwatch.hpp"
-#include "solve/sparse_cholesky.hpp"
 #include "solve/dense_cholesky.hpp"
+#include "solve/sparse_cholesky.hpp"
 
 namespace lamina::solve {
 
 namespace {
-
 
 Real relative_residual(const Eigen::VectorXd& r, const Eigen::VectorXd& b) {
   const Real nb = b.norm();
