@@ -230,10 +230,10 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
     std::vector<int> rank_of(static_cast<std::size_t>(n_nodes), -1);
     std::vector<mls::ShapeFunctionValues> sv;
     // Y(q, 3i + a) = phi_i,a(x_q) (trial), Yt the test gradients (VCI); C = Yt^T diag(weight) Y, so that
-    // the 3 x 3 block (i, j) of C is c_ab = sum_q weight_q phi_i,a phi_j,b.
-    Eigen::MatrixXd Y, Yt, WY, C_lambda, C_mu;
+    // the 3 x 3 block (i, j) of C is c_ab = sum_q weight_q phi_i,a phi_j,b. The mu part's rule is the
+    // cell's rule; the lambda part's is the reduced rule with selective reduced integration, else the same.
+    Eigen::MatrixXd Y, Yt, Y_lambda, Yt_lambda, WY_mu, WY_lambda, C_lambda, C_mu;
     Eigen::VectorXd w, wl, wm;
-    const bool full = !symmetric || in.vci;
     // Loads the gradients of the points [q0, q0 + Q) of a rule into Y (trial) and Yt (test, VCI).
     auto load_points = [&](const VolumeQuadrature& rule, Index q0, Index Q, Index n, bool with_body_force,
                            const Eigen::Matrix3Xd* xi) {
@@ -357,18 +357,6 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
           for (int a = 0; a < 3; ++a) Y(q, 3 * i + a) = p.dot(moments[a].col(i));
       }
     };
-    // out = Yt^T diag(weight) Y; only the upper triangle when symmetric.
-    auto products = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd& out) {
-      WY.noalias() = weight.asDiagonal() * Y;
-      const Index size = Y.cols();
-      out.resize(size, size);
-      if (Y.rows() == 0) {
-        out.setZero();  // no points (Eigen's blocking heuristic divides by the inner dimension)
-        return;
-      }
-      if (full) out.noalias() = (in.vci ? Yt : Y).transpose() * WY;
-      else out.triangularView<Eigen::Upper>() = Y.transpose() * WY;
-    };
     auto material_weights = [&](const std::vector<int>& ids, Index q0, Index Q, Eigen::VectorXd& lambda_w,
                                  Eigen::VectorXd& mu_w) {
       lambda_w.resize(Q);
@@ -394,18 +382,22 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
       }
       // K block (i, j) = lambda_scale c_lambda + mu_scale (c_mu^T + tr(c_mu) I)
       Real lambda_scale = 1.0, mu_scale = 1.0;
-      const Eigen::MatrixXd* lambda_part = &C_lambda;
+      bool shared = false;  // the lambda part is the mu product (uniform material, one rule)
       if (in.reduced) {
         // selective reduced integration: mu part on the full rule, lambda part on the reduced rule
         material_weights(*in.material_of_point, q0, Q, wl, wm);
-        products(wm, C_mu);
+        WY_mu.noalias() = wm.asDiagonal() * Y;
+        Y.swap(Y_lambda);  // keeps the full rule's Y (and Yt) while the reduced rule is loaded
+        Yt.swap(Yt_lambda);
         const VolumeQuadrature& reduced = *in.reduced;
         const Index r0 = reduced.cell_begin[static_cast<std::size_t>(c)];
         const Index R = reduced.cell_begin[static_cast<std::size_t>(c + 1)] - r0;
         if (in.smoothing) load_smoothed(reduced, r0, R, n);
         else load_points(reduced, r0, R, n, false, in.vci_reduced ? in.vci_reduced : in.vci);
         material_weights(*in.material_of_reduced_point, r0, R, wl, wm);
-        products(wl, C_lambda);
+        WY_lambda.noalias() = wl.asDiagonal() * Y;
+        Y.swap(Y_lambda);
+        Yt.swap(Yt_lambda);
       } else {
         const int m0 = (*in.material_of_point)[static_cast<std::size_t>(q0)];
         bool uniform = true;
@@ -413,53 +405,77 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
           if ((*in.material_of_point)[static_cast<std::size_t>(q0 + q)] != m0) uniform = false;
         if (uniform) {
           const auto& mat = (*in.materials)[static_cast<std::size_t>(m0)];
-          products(w, C_mu);
-          lambda_part = &C_mu;
+          WY_mu.noalias() = w.asDiagonal() * Y;
+          shared = true;
           lambda_scale = mat.lambda();
           mu_scale = mat.mu();
         } else {
           material_weights(*in.material_of_point, q0, Q, wl, wm);
-          products(wl, C_lambda);
-          products(wm, C_mu);
+          WY_mu.noalias() = wm.asDiagonal() * Y;
+          WY_lambda.noalias() = wl.asDiagonal() * Y;
         }
       }
+      const Eigen::MatrixXd& test_mu = in.vci ? Yt : Y;
+      const Eigen::MatrixXd& test_lambda = in.reduced ? ((in.vci_reduced || in.vci) ? Yt_lambda : Y_lambda) : test_mu;
+      // The products are formed and added in column tiles of at most tile_entries values, so that a tile
+      // stays in cache between its product and its scatter (a whole 3n x 3n product of a large support
+      // is megabytes per cell: zeroing and reading it back cost more than the product).
+      constexpr Index tile_entries = 16384;
       const Index size = 3 * n;
-      const Real* cl = lambda_part->data();
-      const Real* cm = C_mu.data();
-      // Added straight into the pattern (upper triangle when symmetric); node pairs that no
-      // quadrature point couples have exactly zero blocks and are not in the pattern.
-      for (Index jj = 0; jj < n; ++jj) {
-        const Index J = nodes[static_cast<std::size_t>(jj)];
-        // rank of every pattern neighbour I of J (a table lookup per pair instead of a merge, whose
-        // data-dependent loop exits were mispredicted once per pair)
-        const Index* neighbour = pattern.neighbours_begin(J);
-        const Index count = static_cast<Index>(pattern.neighbours_end(J) - neighbour);
-        for (Index k = 0; k < count; ++k) rank_of[static_cast<std::size_t>(neighbour[k])] = static_cast<int>(k);
-        const Index end = symmetric ? jj + 1 : n;
-        Index column[3];
-        for (int b = 0; b < 3; ++b) column[b] = pattern.column_start(3 * J + b) - offset;
-        for (Index ii = 0; ii < end; ++ii) {
-          const Index I = nodes[static_cast<std::size_t>(ii)];
-          const Index rank = rank_of[static_cast<std::size_t>(I)];
-          if (rank < 0 || rank >= count || neighbour[rank] != I) continue;  // stale entry: not in the pattern
-          const Index r = 3 * rank;
-          // blocks (ii, jj) of the lambda and mu products: entry (a, b) at [(3 jj + b) size + 3 ii + a]
-          const Real* bl = cl + 3 * jj * size + 3 * ii;
-          const Real* bm = cm + 3 * jj * size + 3 * ii;
-          const Real trace = bm[0] + bm[size + 1] + bm[2 * size + 2];
-          if (symmetric && I == J) {
-            // diagonal block: the products are symmetric here, only their upper triangle is stored
+      const Index tile_nodes = std::max<Index>(1, tile_entries / (3 * size));
+      for (Index j0 = 0; j0 < n; j0 += tile_nodes) {
+        const Index j1 = std::min(n, j0 + tile_nodes);
+        // rows 0 .. rows of columns 3 j0 .. 3 j1 (only the upper triangle is added when symmetric)
+        const Index rows = symmetric ? 3 * j1 : size, cols = 3 * (j1 - j0);
+        auto tile = [&](const Eigen::MatrixXd& test, const Eigen::MatrixXd& weighted, Eigen::MatrixXd& out) {
+          if (test.rows() == 0) {
+            out.setZero(rows, cols);  // no points (Eigen's blocking heuristic divides by the inner dimension)
+            return;
+          }
+          out.resize(rows, cols);
+          out.noalias() = test.leftCols(rows).transpose() * weighted.middleCols(3 * j0, cols);
+        };
+        tile(test_mu, WY_mu, C_mu);
+        if (!shared) tile(test_lambda, WY_lambda, C_lambda);
+        const Eigen::MatrixXd& lambda_part = shared ? C_mu : C_lambda;
+        const Real* cl = lambda_part.data();
+        const Real* cm = C_mu.data();
+        const Index ld = rows;
+        // Added straight into the pattern (upper triangle when symmetric); node pairs that no
+        // quadrature point couples have exactly zero blocks and are not in the pattern.
+        for (Index jj = j0; jj < j1; ++jj) {
+          const Index J = nodes[static_cast<std::size_t>(jj)];
+          // rank of every pattern neighbour I of J (a table lookup per pair instead of a merge, whose
+          // data-dependent loop exits were mispredicted once per pair)
+          const Index* neighbour = pattern.neighbours_begin(J);
+          const Index count = static_cast<Index>(pattern.neighbours_end(J) - neighbour);
+          for (Index k = 0; k < count; ++k) rank_of[static_cast<std::size_t>(neighbour[k])] = static_cast<int>(k);
+          const Index end = symmetric ? jj + 1 : n;
+          Index column[3];
+          for (int b = 0; b < 3; ++b) column[b] = pattern.column_start(3 * J + b) - offset;
+          for (Index ii = 0; ii < end; ++ii) {
+            const Index I = nodes[static_cast<std::size_t>(ii)];
+            const Index rank = rank_of[static_cast<std::size_t>(I)];
+            if (rank < 0 || rank >= count || neighbour[rank] != I) continue;  // stale entry: not in the pattern
+            const Index r = 3 * rank;
+            // blocks (ii, jj) of the lambda and mu products: entry (a, b) at [(3 (jj - j0) + b) ld + 3 ii + a]
+            const Real* bl = cl + 3 * (jj - j0) * ld + 3 * ii;
+            const Real* bm = cm + 3 * (jj - j0) * ld + 3 * ii;
+            const Real trace = bm[0] + bm[ld + 1] + bm[2 * ld + 2];
+            if (symmetric && I == J) {
+              // diagonal block: the products are symmetric here, only their upper triangle is stored
+              for (int b = 0; b < 3; ++b) {
+                Real* entry = target + column[b] + r;
+                for (int a = 0; a <= b; ++a)
+                  entry[a] += lambda_scale * bl[b * ld + a] + mu_scale * (bm[b * ld + a] + (a == b ? trace : 0.0));
+              }
+              continue;
+            }
             for (int b = 0; b < 3; ++b) {
               Real* entry = target + column[b] + r;
-              for (int a = 0; a <= b; ++a)
-                entry[a] += lambda_scale * bl[b * size + a] + mu_scale * (bm[b * size + a] + (a == b ? trace : 0.0));
+              for (int a = 0; a < 3; ++a)
+                entry[a] += lambda_scale * bl[b * ld + a] + mu_scale * (bm[a * ld + b] + (a == b ? trace : 0.0));
             }
-            continue;
-          }
-          for (int b = 0; b < 3; ++b) {
-            Real* entry = target + column[b] + r;
-            for (int a = 0; a < 3; ++a)
-              entry[a] += lambda_scale * bl[b * size + a] + mu_scale * (bm[a * size + b] + (a == b ? trace : 0.0));
           }
         }
       }
