@@ -15,10 +15,12 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "app/method_registry.hpp"
 #include "app/run_command.hpp"
 #include "app/validate_command.hpp"
+#include "core/memory.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/omll_deck.hpp"
@@ -85,7 +87,14 @@ int run_under_mpirun(int argc, char** argv, int ranks, int threads) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  lamina::parallel::Environment mpi(argc, argv);  // MPI only when started by mpirun
+  lamina::use_huge_page_heap();  // before any thread starts (core/memory.hpp)
+  std::optional<lamina::parallel::Environment> mpi;  // MPI only when started by mpirun
+  try {
+    mpi.emplace(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 3;
+  }
   const auto& comm = lamina::parallel::Communicator::world();
   CLI::App cli{"lamina: meshfree and particle analysis of thin-walled structures"};
   cli.require_subcommand(1);
