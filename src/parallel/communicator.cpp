@@ -1,14 +1,18 @@
 #include "parallel/communicator.hpp"
 
-#include <mpi.h>
-
 #include <cstdlib>
 #include <numeric>
+
+#include "core/error.hpp"
+#include "core/runtime_module.hpp"
+#include "parallel/mpi_module.hpp"
 
 namespace lamina::parallel {
 
 namespace {
 bool mpi_started = false;
+const MpiModule* module = nullptr;
+
 std::vector<std::function<void()>>& finalize_hooks() {
   static std::vector<std::function<void()>> hooks;
   return hooks;
@@ -20,18 +24,24 @@ bool launched_by_mpirun() {
   return false;
 }
 
-MPI_Datatype index_type() { return sizeof(Index) == 8 ? MPI_INT64_T : MPI_INT32_T; }
-
-void reduce_in_place(std::vector<Real>& values, MPI_Op op) {
-  if (!values.empty())
-    MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, op, MPI_COMM_WORLD);
+void reduce_in_place(std::vector<Real>& values, Reduction op) {
+  if (!values.empty()) mpi_module().all_reduce(values.data(), static_cast<int>(values.size()), WireType::real, op);
 }
 }  // namespace
 
+const MpiModule& mpi_module() {
+  if (module) return *module;
+  std::string why;
+  module = open_module_table<MpiModule>(LAMINA_MPI_TRANSPORT_NAME, LAMINA_MPI_TRANSPORT_PATH, "lamina_mpi_transport",
+                                        MpiModule::abi_version, why);  // stays loaded until the process ends
+  if (!module)
+    throw SolverUnavailable("the MPI module " + std::string(LAMINA_MPI_TRANSPORT_NAME) + " could not be loaded: " + why);
+  return *module;
+}
+
 Environment::Environment(int& argc, char**& argv) {
   if (!launched_by_mpirun()) return;
-  int provided = 0;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  if (mpi_module().start(&argc, &argv) != 0) throw AnalysisError("MPI_Init_thread failed");
   mpi_started = true;
 }
 
@@ -39,18 +49,15 @@ Environment::~Environment() {
   auto& hooks = finalize_hooks();
   for (auto it = hooks.rbegin(); it != hooks.rend(); ++it) (*it)();
   hooks.clear();
-  if (!mpi_started) return;
-  int finalized = 0;
-  MPI_Finalized(&finalized);
-  if (!finalized) MPI_Finalize();
+  if (mpi_started) mpi_module().finish();
 }
 
 void Environment::before_finalize(std::function<void()> hook) { finalize_hooks().push_back(std::move(hook)); }
 
 Communicator::Communicator(bool join_world) {
   if (!join_world || !mpi_started) return;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  rank_ = mpi_module().rank();
+  size_ = mpi_module().size();
 }
 
 const Communicator& Communicator::world() {
@@ -65,45 +72,41 @@ const Communicator& Communicator::single() {
 
 Real Communicator::sum(Real value) const {
   if (!distributed()) return value;
-  Real out = 0;
-  MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  return out;
+  mpi_module().all_reduce(&value, 1, WireType::real, Reduction::sum);
+  return value;
 }
 
 void Communicator::sum(std::vector<Real>& values) const {
-  if (distributed()) reduce_in_place(values, MPI_SUM);
+  if (distributed()) reduce_in_place(values, Reduction::sum);
 }
 
 Real Communicator::max(Real value) const {
   if (!distributed()) return value;
-  Real out = 0;
-  MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return out;
+  mpi_module().all_reduce(&value, 1, WireType::real, Reduction::max);
+  return value;
 }
 
 void Communicator::max(std::vector<Real>& values) const {
-  if (distributed()) reduce_in_place(values, MPI_MAX);
+  if (distributed()) reduce_in_place(values, Reduction::max);
 }
 
 Index Communicator::sum(Index value) const {
   if (!distributed()) return value;
-  Index out = 0;
-  MPI_Allreduce(&value, &out, 1, index_type(), MPI_SUM, MPI_COMM_WORLD);
-  return out;
+  mpi_module().all_reduce(&value, 1, WireType::index, Reduction::sum);
+  return value;
 }
 
 std::vector<Real> Communicator::all_gather(const std::vector<Real>& values) const {
   if (!distributed()) return values;
   std::vector<Real> out(values.size() * static_cast<std::size_t>(size_));
-  MPI_Allgather(values.data(), static_cast<int>(values.size()), MPI_DOUBLE, out.data(), static_cast<int>(values.size()),
-                MPI_DOUBLE, MPI_COMM_WORLD);
+  mpi_module().all_gather(values.data(), static_cast<int>(values.size()), WireType::real, out.data());
   return out;
 }
 
 std::vector<int> Communicator::all_gather(int value) const {
   if (!distributed()) return {value};
   std::vector<int> out(static_cast<std::size_t>(size_));
-  MPI_Allgather(&value, 1, MPI_INT, out.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  mpi_module().all_gather(&value, 1, WireType::int32, out.data());
   return out;
 }
 
@@ -113,8 +116,8 @@ std::vector<Index> Communicator::all_gather_lists(const std::vector<Index>& valu
   std::vector<int> offsets(counts.size(), 0);
   std::partial_sum(counts.begin(), counts.end() - 1, offsets.begin() + 1);
   std::vector<Index> out(static_cast<std::size_t>(offsets.back() + counts.back()));
-  MPI_Allgatherv(values.data(), static_cast<int>(values.size()), index_type(), out.data(), counts.data(), offsets.data(),
-                 index_type(), MPI_COMM_WORLD);
+  mpi_module().all_gather_v(values.data(), static_cast<int>(values.size()), WireType::index, out.data(), counts.data(),
+                            offsets.data());
   return out;
 }
 
@@ -132,7 +135,7 @@ void Communicator::all_gather_blocks(Real* data, int rows, const std::vector<Ind
     offsets[r] = static_cast<int>(rows * begins[r]);
     counts[r] = static_cast<int>(rows * (begins[r + 1] - begins[r]));
   }
-  MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, counts.data(), offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  mpi_module().all_gather_v(nullptr, 0, WireType::real, data, counts.data(), offsets.data());
 }
 
 void Communicator::exchange_columns(std::initializer_list<std::pair<Real*, int>> arrays,
@@ -144,14 +147,17 @@ void Communicator::exchange_columns(std::initializer_list<std::pair<Real*, int>>
   thread_local std::vector<std::vector<Real>> outgoing, incoming;
   outgoing.resize(static_cast<std::size_t>(size_));
   incoming.resize(static_cast<std::size_t>(size_));
-  std::vector<MPI_Request> requests;
+  std::vector<Real*> receive_buffers;
+  std::vector<const Real*> send_buffers;
+  std::vector<int> receive_counts, receive_ranks, send_counts, send_ranks;
   for (int q = 0; q < size_; ++q) {
     const auto& list = receive[static_cast<std::size_t>(q)];
     if (q == rank_ || list.empty()) continue;
     auto& buffer = incoming[static_cast<std::size_t>(q)];
     buffer.resize(list.size() * static_cast<std::size_t>(per_node));
-    requests.emplace_back();
-    MPI_Irecv(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, q, 71, MPI_COMM_WORLD, &requests.back());
+    receive_buffers.push_back(buffer.data());
+    receive_counts.push_back(static_cast<int>(buffer.size()));
+    receive_ranks.push_back(q);
   }
   for (int q = 0; q < size_; ++q) {
     const auto& list = send[static_cast<std::size_t>(q)];
@@ -162,10 +168,13 @@ void Communicator::exchange_columns(std::initializer_list<std::pair<Real*, int>>
     for (Index node : list)
       for (const auto& [data, rows] : arrays)
         for (int r = 0; r < rows; ++r) *out++ = data[rows * node + r];
-    requests.emplace_back();
-    MPI_Isend(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, q, 71, MPI_COMM_WORLD, &requests.back());
+    send_buffers.push_back(buffer.data());
+    send_counts.push_back(static_cast<int>(buffer.size()));
+    send_ranks.push_back(q);
   }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  mpi_module().exchange(static_cast<int>(receive_buffers.size()), receive_buffers.data(), receive_counts.data(),
+                        receive_ranks.data(), static_cast<int>(send_buffers.size()), send_buffers.data(), send_counts.data(),
+                        send_ranks.data(), 71);
   for (int q = 0; q < size_; ++q) {
     const auto& list = receive[static_cast<std::size_t>(q)];
     if (q == rank_ || list.empty()) continue;
@@ -176,17 +185,39 @@ void Communicator::exchange_columns(std::initializer_list<std::pair<Real*, int>>
   }
 }
 
+std::vector<int> Communicator::all_to_all(const std::vector<int>& values) const {
+  if (!distributed()) return values;
+  std::vector<int> out(static_cast<std::size_t>(size_));
+  const std::vector<int> ones(static_cast<std::size_t>(size_), 1);
+  std::vector<int> offsets(static_cast<std::size_t>(size_));
+  std::iota(offsets.begin(), offsets.end(), 0);
+  mpi_module().all_to_all_v(values.data(), ones.data(), offsets.data(), out.data(), ones.data(), offsets.data(), WireType::int32);
+  return out;
+}
+
+std::vector<Index> Communicator::all_to_all_lists(const std::vector<Index>& values, const std::vector<int>& send_counts,
+                                                  const std::vector<int>& receive_counts) const {
+  if (!distributed()) return values;
+  std::vector<int> send_offsets(send_counts.size(), 0), receive_offsets(receive_counts.size(), 0);
+  std::partial_sum(send_counts.begin(), send_counts.end() - 1, send_offsets.begin() + 1);
+  std::partial_sum(receive_counts.begin(), receive_counts.end() - 1, receive_offsets.begin() + 1);
+  std::vector<Index> out(static_cast<std::size_t>(receive_offsets.back() + receive_counts.back()));
+  mpi_module().all_to_all_v(values.data(), send_counts.data(), send_offsets.data(), out.data(), receive_counts.data(),
+                            receive_offsets.data(), WireType::index);
+  return out;
+}
+
 std::string Communicator::broadcast(const std::string& value) const {
   if (!distributed()) return value;
   int length = static_cast<int>(value.size());
-  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  mpi_module().broadcast(&length, 1, WireType::int32, 0);
   std::string out = root() ? value : std::string(static_cast<std::size_t>(length), '\0');
-  MPI_Bcast(out.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  mpi_module().broadcast(out.data(), length, WireType::character, 0);
   return out;
 }
 
 void Communicator::barrier() const {
-  if (distributed()) MPI_Barrier(MPI_COMM_WORLD);
+  if (distributed()) mpi_module().barrier();
 }
 
 

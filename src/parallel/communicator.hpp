@@ -1,6 +1,6 @@
 #pragma once
 // Communicator: the ranks of a run (MPI_COMM_WORLD when lamina was started by mpirun, else one rank
-// with no MPI call at all) and the few collective operations the families need: sums, maxima,
+// with no MPI call at all; the MPI calls are in a module loaded only then, parallel/mpi_module.hpp) and the few collective operations the families need: sums, maxima,
 // gathers and broadcasts. Reductions are plain MPI_Allreduce: their result depends on the rank count
 // in the last bits only (docs/scaling.md).
 #include <functional>
@@ -64,6 +64,14 @@ class Communicator {
   /// ranks with non-empty lists.
   void exchange_columns(std::initializer_list<std::pair<Real*, int>> arrays, const std::vector<std::vector<Index>>& send,
                         const std::vector<std::vector<Index>>& receive) const;
+  /// Entry q of every rank's `values` (one per rank) goes to rank q: entry r of the result is rank r's
+  /// entry for this rank (MPI_Alltoall). Collective.
+  std::vector<int> all_to_all(const std::vector<int>& values) const;
+  /// Personalised exchange of lists: `values` holds this rank's lists for ranks 0, 1, ... one after the
+  /// other (send_counts[q] entries for rank q); the result holds the lists received from ranks 0, 1, ...
+  /// (receive_counts[r] from rank r, as all_to_all of send_counts gives). Collective.
+  std::vector<Index> all_to_all_lists(const std::vector<Index>& values, const std::vector<int>& send_counts,
+                                      const std::vector<int>& receive_counts) const;
   /// Rank 0's value on every rank.
   std::string broadcast(const std::string& value) const;
   void barrier() const;

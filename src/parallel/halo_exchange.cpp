@@ -1,16 +1,10 @@
 #include "parallel/halo_exchange.hpp"
 
-#include <mpi.h>
-
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
 
 namespace lamina::parallel {
-
-namespace {
-MPI_Datatype index_type() { return sizeof(Index) == 8 ? MPI_INT64_T : MPI_INT32_T; }
-}  // namespace
 
 HaloExchange::HaloExchange(const std::vector<Index>& global, const std::vector<int>& owner, const Communicator& comm) {
   if (!comm.distributed()) return;
@@ -26,16 +20,14 @@ HaloExchange::HaloExchange(const std::vector<Index>& global, const std::vector<i
       wanted[static_cast<std::size_t>(owner[k])].push_back(global[k]);
       wanted_local[static_cast<std::size_t>(owner[k])].push_back(static_cast<Index>(k));
     }
-  std::vector<int> send_counts(static_cast<std::size_t>(ranks)), receive_counts(static_cast<std::size_t>(ranks));
+  std::vector<int> send_counts(static_cast<std::size_t>(ranks));
   for (int r = 0; r < ranks; ++r) send_counts[static_cast<std::size_t>(r)] = static_cast<int>(wanted[static_cast<std::size_t>(r)].size());
-  MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<int> send_offsets(static_cast<std::size_t>(ranks), 0), receive_offsets(static_cast<std::size_t>(ranks), 0);
-  std::partial_sum(send_counts.begin(), send_counts.end() - 1, send_offsets.begin() + 1);
-  std::partial_sum(receive_counts.begin(), receive_counts.end() - 1, receive_offsets.begin() + 1);
-  std::vector<Index> requests, asked(static_cast<std::size_t>(receive_offsets.back() + receive_counts.back()));
+  const std::vector<int> receive_counts = comm.all_to_all(send_counts);
+  std::vector<Index> requests;
   for (const auto& list : wanted) requests.insert(requests.end(), list.begin(), list.end());
-  MPI_Alltoallv(requests.data(), send_counts.data(), send_offsets.data(), index_type(), asked.data(), receive_counts.data(),
-                receive_offsets.data(), index_type(), MPI_COMM_WORLD);
+  const std::vector<Index> asked = comm.all_to_all_lists(requests, send_counts, receive_counts);
+  std::vector<int> receive_offsets(static_cast<std::size_t>(ranks), 0);
+  std::partial_sum(receive_counts.begin(), receive_counts.end() - 1, receive_offsets.begin() + 1);
   for (int r = 0; r < ranks; ++r) {
     const auto ru = static_cast<std::size_t>(r);
     receive_[ru] = wanted_local[ru];
