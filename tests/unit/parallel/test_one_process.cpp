@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -16,6 +19,21 @@
 
 namespace lamina {
 namespace {
+
+/// True if the environment this process was started with (/proc/self/environ) defines `name`.
+bool started_with(const std::string& name) {
+  std::ifstream file("/proc/self/environ", std::ios::binary);
+  const std::string block((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  return ("\0" + block).find("\0" + name + "=") != std::string::npos;
+}
+
+// src/openmp_defaults: idle OpenMP threads spin 10,000 times unless the user's environment says how long.
+TEST(OpenMpDefaults, IdleThreadsSpinBrieflyUnlessTheEnvironmentSaysOtherwise) {
+  if (started_with("OMP_WAIT_POLICY") || started_with("GOMP_SPINCOUNT")) GTEST_SKIP() << "set by the environment";
+  const char* spin = std::getenv("GOMP_SPINCOUNT");
+  ASSERT_NE(spin, nullptr);
+  EXPECT_STREQ(spin, "10000");
+}
 
 TEST(ParallelOneProcess, CommunicatorIsOneRankWithoutMpirun) {
   const auto& comm = parallel::Communicator::world();
