@@ -125,7 +125,7 @@ void coordinates(void* data, int /*gid_size*/, int /*lid_size*/, int count, ZOLT
   *error = ZOLTAN_OK;
 }
 
-int bisect(const Real* points, Index /*count*/, Index first, Index last, int* parts, char* error, int error_size) {
+int bisect(const Real* points, Index first, Index last, int* parts, char* error, int error_size) {
   static bool initialised = false;
   if (!initialised) {
     float version = 0;

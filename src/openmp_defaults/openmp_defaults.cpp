@@ -18,6 +18,3 @@ __attribute__((constructor)) void set_openmp_spin_count() {
 }
 
 }  // namespace
-
-/// A symbol the executable refers to, so that the linker keeps the library in its dependency list.
-extern "C" __attribute__((visibility("default"))) int lamina_openmp_defaults() { return 10000; }

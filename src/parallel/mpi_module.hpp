@@ -33,9 +33,9 @@ struct MpiModule {
   void (*broadcast)(void* data, int count, WireType type, int root);
   void (*barrier)();
   /// Zoltan recursive coordinate bisection, one part per rank: this rank hands in the columns [first, last)
-  /// of `points` (3 x count, column-major, the same on every rank) and gets their parts in `parts`
+  /// of `points` (3 x N, column-major, the same on every rank) and gets their parts in `parts`
   /// (last - first entries). 0 on success, else a message in `error` (at most error_size characters).
-  int (*bisect)(const Real* points, Index count, Index first, Index last, int* parts, char* error, int error_size);
+  int (*bisect)(const Real* points, Index first, Index last, int* parts, char* error, int error_size);
 };
 
 /// The loaded module (Environment loads it in a process started by mpirun); throws SolverUnavailable

@@ -13,7 +13,7 @@ std::vector<int> recursive_coordinate_bisection(const PointMatrix& points, const
   const Index first = n * rank / ranks, last = n * (rank + 1) / ranks;
   std::vector<int> parts(static_cast<std::size_t>(last - first));
   char error[256] = {};
-  if (mpi_module().bisect(points.data(), n, first, last, parts.data(), error, static_cast<int>(sizeof error)) != 0)
+  if (mpi_module().bisect(points.data(), first, last, parts.data(), error, static_cast<int>(sizeof error)) != 0)
     throw std::runtime_error(error);
   // this rank's block, then every rank's blocks in rank order
   const std::vector<Index> all = comm.all_gather_lists(std::vector<Index>(parts.begin(), parts.end()));
