@@ -1,5 +1,6 @@
 // Throughput of MLS shape functions with first derivatives: 3D quadratic basis (m = 10), quartic
-// spline, box supports with kappa = 1.7 on a regular 40^3 grid (about 39 neighbours per point).
+// spline, box supports with kappa = 1.7 (radius (kappa + delta) h = 1.8 h) on a regular 40^3 grid
+// (about 46 neighbours per point).
 // Evaluation points: 8 random points in each unit background cell, cells visited in order (the
 // access pattern of an EFG assembly), and the same points in random order. Ends with "BENCH <name> <value> <unit>" lines
 // (see bench/README.md).
@@ -43,7 +44,7 @@ const MlsShapeFunctions& shape_functions() {
 }
 
 /// 8 uniformly random points in each unit background cell, cell after cell. (Gauss points at fixed
-/// offsets would see either 27 or 64 neighbours with this support, random points 39 on average.)
+/// offsets would see either 27 or 64 neighbours with this support, random points 46 on average.)
 const PointMatrix& cell_ordered_points() {
   static const PointMatrix instance = [] {
     std::mt19937 generator(7);

@@ -2,82 +2,73 @@
 // Factorisation of the m x m MLS moment matrix A (seed 004, A r = p of eqs 1-18/1-19): Jacobi-scaled dense
 // Cholesky in fixed-size storage, condition estimate, and the map to a weighted-orthonormal basis.
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <utility>
 
 #include "core/types.hpp"
 
 namespace lamina::mls {
 
-/// Factors S A S = L L^T with S = diag(1/sqrt(A_aa)) and forms T = L^-1 S, so that A^-1 = T^T T and
-/// the basis q = T p is orthonormal for the weighted inner product that defines A.
-/// Condition estimate: ||S A S||_1 * ||L^-1||_F^2 = ||S A S||_1 * trace((S A S)^-1), an upper bound of the
-/// 2-norm condition number of the Jacobi-scaled A, at most m^1.5 times too large.
+/// Inverts the Jacobi-scaled A_s = S A S (S = diag(1/sqrt(A_aa))) by symmetric Gauss-Jordan elimination,
+/// so that A^-1 = S A_s^-1 S; on request forms T = L^-1 S from A_s = L L^T, so that A^-1 = T^T T and the
+/// basis q = T p is orthonormal for the weighted inner product that defines A.
+/// Condition estimate: ||A_s||_1 * trace(A_s^-1) (= ||A_s||_1 ||L^-1||_F^2), an upper bound of the
+/// 2-norm condition number of A_s, at most m^1.5 times too large.
 template <int M>
 class MomentMatrixFactor {
  public:
   using Matrix = Eigen::Matrix<Real, M, M>;
   using Vector = Eigen::Matrix<Real, M, 1>;
 
-  /// Factors the symmetric A (only the lower triangle is read). Returns false if A is singular or
-  /// ill-conditioned: a non-positive diagonal, a Cholesky pivot of the scaled matrix below
-  /// 1 / max_condition (then cond_2 >= 1 / pivot > max_condition for certain), or an estimate above
-  /// max_condition.
-  // Plain scalar loops on purpose: for m <= 10, vectorised in-place updates mostly stall on store
-  // forwarding (a vector load of values just written by scalar stores).
-  [[gnu::optimize("no-tree-vectorize")]] bool factor(const Matrix& a, Real max_condition) {
+  /// Factors the symmetric A (both triangles are read). Returns false if A is singular or
+  /// ill-conditioned: a non-positive diagonal, a pivot of the scaled matrix below 1 / max_condition
+  /// (then cond_2 >= 1 / pivot > max_condition for certain), or an estimate above max_condition.
+  /// The pivots are those of the Cholesky factorisation (the diagonals of the Schur complements).
+  bool factor(const Matrix& a, Real max_condition) {
     condition_ = std::numeric_limits<Real>::infinity();
-    Real scale[M];
-    for (int k = 0; k < M; ++k) {
-      const Real diagonal = a(k, k);
-      if (!(diagonal > 0.0) || !std::isfinite(diagonal)) return false;
-      scale[k] = 1.0 / std::sqrt(diagonal);
+    has_transform_ = false;
+    // S as vectors of four (vector square roots and divisions; padding lanes 1).
+    Real4 scale[blocks];
+    for (int b = 0; b < blocks; ++b) {
+      Real4 diagonal;
+      for (int l = 0; l < 4; ++l) diagonal[l] = 4 * b + l < M ? a(4 * b + l, 4 * b + l) : 1.0;
+      for (int l = 0; l < 4; ++l)
+        if (!(diagonal[l] > 0.0) || !std::isfinite(diagonal[l])) return false;
+      scale[b] = 1.0 / Real4{std::sqrt(diagonal[0]), std::sqrt(diagonal[1]), std::sqrt(diagonal[2]),
+                             std::sqrt(diagonal[3])};
     }
-    // Scaled matrix (lower triangle, lower[i][j] for i >= j) and its 1-norm.
-    Real lower[M][M];
-    Real column_sums[M];
-    for (int j = 0; j < M; ++j) column_sums[j] = 1.0;
-    for (int j = 0; j < M; ++j) {
-      lower[j][j] = 1.0;
-      for (int i = j + 1; i < M; ++i) {
-        const Real value = a(i, j) * scale[i] * scale[j];
-        lower[i][j] = value;
-        column_sums[j] += std::abs(value);
-        column_sums[i] += std::abs(value);
-      }
-    }
+    for (int b = 0; b < blocks; ++b) scale_[b] = scale[b];
+    // A_s = S A S by rows (column i of the column-major A is row i of the symmetric A), padded with
+    // zeros; its 1-norm (the largest row sum of |A_s|).
     Real norm = 0.0;
-    for (int j = 0; j < M; ++j) norm = std::max(norm, column_sums[j]);
-    // Left-looking Cholesky by rows: lower[i][j] = (s_ij - sum_k<j L_ik L_jk) / L_jj.
+    for (int i = 0; i < M; ++i) {
+      const Real* column = a.data() + i * M;
+      const Real scale_i = scale[i / 4][i % 4];
+      Real4 sums = {0.0, 0.0, 0.0, 0.0};
+      for (int b = 0; b < blocks; ++b) {
+        Real4 values;
+        for (int l = 0; l < 4; ++l) values[l] = 4 * b + l < M ? column[4 * b + l] : 0.0;
+        const Real4 row = values * scale[b] * scale_i;
+        rows_[i][b] = row;
+        sums += row < 0.0 ? -row : row;
+      }
+      norm = std::max(norm, sums[0] + sums[1] + sums[2] + sums[3]);
+    }
+    for (int i = 0; i < M; ++i)
+      for (int b = 0; b < blocks; ++b) scaled_[i][b] = rows_[i][b];
+    // Gauss-Jordan in place: step k divides row k by the pivot and eliminates column k from the other
+    // rows. The rows' updates are independent vector operations, unlike the chains of dot products of
+    // a Cholesky factorisation and a triangular inverse. Unrolled over k, so every lane index is a
+    // constant and the rows stay in registers.
     const Real minimum_pivot = 1.0 / max_condition;
-    Real inverse_diagonal[M];
-    for (int i = 0; i < M; ++i) {
-      for (int j = 0; j < i; ++j) {
-        Real value = lower[i][j];
-        for (int k = 0; k < j; ++k) value -= lower[i][k] * lower[j][k];
-        lower[i][j] = value * inverse_diagonal[j];
-      }
-      Real pivot = lower[i][i];
-      for (int k = 0; k < i; ++k) pivot -= lower[i][k] * lower[i][k];
-      if (!(pivot > minimum_pivot)) return false;
-      const Real root = std::sqrt(pivot);
-      lower[i][i] = root;
-      inverse_diagonal[i] = 1.0 / root;
-    }
-    // T = L^-1 S by rows: T_ij = -(sum_{j<=k<i} L_ik T_kj) / L_ii, T_ii = 1 / L_ii.
-    Real inverse[M][M];
+    bool regular = true;
+    [&]<int... K>(std::integer_sequence<int, K...>) {
+      ((regular = regular && eliminate<K>(minimum_pivot)), ...);
+    }(std::make_integer_sequence<int, M>{});
+    if (!regular) return false;
     Real trace = 0.0;
-    for (int i = 0; i < M; ++i) {
-      for (int j = 0; j < i; ++j) {
-        Real value = 0.0;
-        for (int k = j; k < i; ++k) value -= lower[i][k] * inverse[k][j];
-        inverse[i][j] = value * inverse_diagonal[i];
-        trace += inverse[i][j] * inverse[i][j];
-      }
-      inverse[i][i] = inverse_diagonal[i];
-      trace += inverse_diagonal[i] * inverse_diagonal[i];
-    }
-    for (int j = 0; j < M; ++j)
-      for (int i = 0; i < M; ++i) transform_(i, j) = i >= j ? inverse[i][j] * scale[j] : 0.0;
+    for (int k = 0; k < M; ++k) trace += rows_[k][k / 4][k % 4];
     condition_ = norm * trace;
     return std::isfinite(condition_) && condition_ <= max_condition;
   }
@@ -85,14 +76,88 @@ class MomentMatrixFactor {
   /// Condition estimate of the Jacobi-scaled A (infinity if factor() stopped early).
   Real condition() const { return condition_; }
 
-  /// T = L^-1 S (lower triangular).
-  const Matrix& transform() const { return transform_; }
+  /// T = L^-1 S (lower triangular), formed on the first call after factor().
+  const Matrix& transform() const {
+    if (!has_transform_) form_transform();
+    return transform_;
+  }
 
-  /// y = A^-1 b = T^T (T b).
-  Vector solve(const Vector& b) const { return transform_.transpose().lazyProduct(transform_.lazyProduct(b)); }
+  /// y = A^-1 b = S A_s^-1 S b (A_s^-1 symmetric: a sum of its rows).
+  Vector solve(const Vector& b) const {
+    Real4 sum[blocks] = {};
+    for (int j = 0; j < M; ++j) {
+      const Real coefficient = scale_[j / 4][j % 4] * b[j];
+      for (int k = 0; k < blocks; ++k) sum[k] += coefficient * rows_[j][k];
+    }
+    Vector y;
+    for (int k = 0; k < blocks; ++k) {
+      const Real4 scaled = sum[k] * scale_[k];
+      for (int l = 0; l < 4; ++l)
+        if (4 * k + l < M) y[4 * k + l] = scaled[l];
+    }
+    return y;
+  }
 
  private:
-  Matrix transform_ = Matrix::Identity();
+  using Real4 = Real __attribute__((vector_size(32)));  // four doubles (one AVX2 register)
+  static constexpr int blocks = (M + 3) / 4;
+
+  template <int K>
+  bool eliminate(Real minimum_pivot) {
+    constexpr int kb = K / 4, kl = K % 4;
+    const Real pivot = rows_[K][kb][kl];
+    if (!(pivot > minimum_pivot)) return false;
+    const Real inverse_pivot = 1.0 / pivot;
+    Real4 row[blocks];
+    for (int b = 0; b < blocks; ++b) row[b] = rows_[K][b] * inverse_pivot;
+    row[kb][kl] = inverse_pivot;
+    for (int i = 0; i < M; ++i) {
+      if (i == K) continue;
+      const Real factor = rows_[i][kb][kl];
+      for (int b = 0; b < blocks; ++b) rows_[i][b] -= factor * row[b];
+      rows_[i][kb][kl] = -factor * inverse_pivot;
+    }
+    for (int b = 0; b < blocks; ++b) rows_[K][b] = row[b];
+    return true;
+  }
+
+  /// Left-looking Cholesky of A_s by rows, then T = L^-1 S by rows.
+  void form_transform() const {
+    auto scaled = [&](int i, int j) { return scaled_[i][j / 4][j % 4]; };
+    Real lower[M][M];
+    Real inverse_diagonal[M];
+    for (int i = 0; i < M; ++i) {
+      for (int j = 0; j < i; ++j) {
+        Real value = scaled(i, j);
+        for (int k = 0; k < j; ++k) value -= lower[i][k] * lower[j][k];
+        lower[i][j] = value * inverse_diagonal[j];
+      }
+      Real pivot = scaled(i, i);
+      for (int k = 0; k < i; ++k) pivot -= lower[i][k] * lower[i][k];
+      const Real root = std::sqrt(std::max(pivot, std::numeric_limits<Real>::min()));
+      lower[i][i] = root;
+      inverse_diagonal[i] = 1.0 / root;
+    }
+    Real inverse[M][M];
+    for (int i = 0; i < M; ++i) {
+      for (int j = 0; j < i; ++j) {
+        Real value = 0.0;
+        for (int k = j; k < i; ++k) value -= lower[i][k] * inverse[k][j];
+        inverse[i][j] = value * inverse_diagonal[i];
+      }
+      inverse[i][i] = inverse_diagonal[i];
+    }
+    for (int j = 0; j < M; ++j)
+      for (int i = 0; i < M; ++i) transform_(i, j) = i >= j ? inverse[i][j] * scale_[j / 4][j % 4] : 0.0;
+    has_transform_ = true;
+  }
+
+  // Set by factor() (not initialised here: a factor object is made for every evaluation point).
+  Real4 scale_[blocks];
+  Real4 scaled_[M][blocks];  // A_s
+  Real4 rows_[M][blocks];    // A_s^-1
+  mutable Matrix transform_;
+  mutable bool has_transform_ = false;
   Real condition_ = std::numeric_limits<Real>::infinity();
 };
 
