@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <exception>
 #include <limits>
 #include <stdexcept>
@@ -25,7 +24,6 @@ struct MlsWorkspace {
   std::vector<std::pair<Index, Index>> candidates;  // (node index, slot in the unsorted buffers); grow-only
   std::vector<std::pair<Real, Index>> nearest;
   std::vector<Real> unsorted_offsets, unsorted_inverse_radii;
-  std::vector<Index> positions;     // cell-order positions of the neighbours (node-centred supports); grow-only
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * n): x_d - x_I,d and 1 / R_I,d of the n neighbours
   // (the unsorted buffers of gather(): one row per direction of the candidate count)
@@ -49,16 +47,6 @@ constexpr Real orthonormalise_condition = 1e2;
 detail::MlsWorkspace& thread_workspace() {
   thread_local detail::MlsWorkspace workspace;
   return workspace;
-}
-
-// Four doubles / four 64-bit masks as GCC vector extensions (one AVX2 register; two SSE2 ones on
-// older targets): the support test of four candidate nodes at once.
-using Real4 = Real __attribute__((vector_size(32)));
-using Mask4 = long long __attribute__((vector_size(32)));
-Real4 load4(const Real* values) {
-  Real4 result;
-  std::memcpy(&result, values, sizeof(result));
-  return result;
 }
 
 template <class Vector>
@@ -354,15 +342,9 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
   if (!(cell_size > 0.0) || !std::isfinite(cell_size)) cell_size = 1.0;  // single node / coincident nodes
   cells_ = CellList(projected_, cell_size);
   if (node_centred()) {
-    // rows x, y, z, 1/R_x, 1/R_y, 1/R_z in cell order, each padded with candidate_chunk zeros
-    sorted_stride_ = static_cast<std::size_t>(count) + candidate_chunk;
-    sorted_nodes_.assign(6 * sorted_stride_, 0.0);
-    const PointMatrix& sorted = cells_.sorted_points();
+    sorted_inverse_radii_ = Eigen::Matrix3Xd::Zero(3, count);
     for (Index k = 0; k < count; ++k)
-      for (int d = 0; d < 3; ++d) {
-        sorted_nodes_[d * sorted_stride_ + k] = sorted(d, k);
-        if (d < dimension) sorted_nodes_[(3 + d) * sorted_stride_ + k] = 1.0 / radii_(d, cells_.order()[k]);
-      }
+      for (int d = 0; d < dimension; ++d) sorted_inverse_radii_(d, k) = 1.0 / radii_(d, cells_.order()[k]);
   }
 }
 
@@ -374,10 +356,10 @@ bool MlsShapeFunctions::node_centred() const {
 template <int Dim>
 Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest_count,
                                 detail::MlsWorkspace& workspace, Vec3& rho) const {
-  if (node_centred()) return gather_node_centred<Dim>(x, radius_factor, workspace, rho);
   const bool box = options_.shape == SupportShape::box;
   const PointMatrix& sorted = cells_.sorted_points();
   const Index* order = cells_.order().data();
+  const Real inverse_factor = 1.0 / radius_factor;
   std::size_t count = 0;
   std::pair<Index, Index>* candidates = nullptr;
   // candidate slot c, direction d at [d * stride + c] (structure of arrays)
@@ -402,150 +384,112 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     ++count;
   };
 
-  cells_.nearest(x, nearest_count, workspace.nearest);
-  const Real point_radius = workspace.nearest.empty()
-                                ? 0.0
-                                : options_.scale * (1.0 + support_epsilon) * std::sqrt(workspace.nearest.back().first);
-  if (!(point_radius > 0.0)) return 0;
-  const Real inverse = 1.0 / point_radius;
-  const Real inverses[3] = {inverse, inverse, inverse};
-  auto consider = [&](Index index, const Real* offset) {
+  if (node_centred()) {
+    const Vec3 reach = max_radius_ * radius_factor;
+    const Vec3 low = x - reach, high = x + reach;
+    reserve(cells_.count_candidates(low, high) + 1);
+    const Real* points = sorted.data();
+    const Real* node_inverse_radii = sorted_inverse_radii_.data();
     if (box) {
-      for (int d = 0; d < Dim; ++d)
-        if (!(std::abs(offset[d]) < point_radius)) return;
+      cells_.for_each_candidate(low, high, [&](Index k) {
+        const Real* p = points + 3 * k;
+        const Real* radius = node_inverse_radii + 3 * k;
+        const Real offset[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        const Real inverse[3] = {radius[0] * inverse_factor, radius[1] * inverse_factor, radius[2] * inverse_factor};
+        bool inside = true;
+        for (int d = 0; d < Dim; ++d) inside &= std::abs(offset[d]) * inverse[d] < 1.0;
+        // Branch-free: write the candidate, keep it only if inside (about half are rejected).
+        candidates[count] = {order[k], static_cast<Index>(count)};
+        for (int d = 0; d < 3; ++d) {
+          offsets[d * stride + count] = offset[d];
+          inverse_radii[d * stride + count] = inverse[d];
+        }
+        count += inside ? 1 : 0;
+      });
     } else {
-      Real squared = 0.0;
-      for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
-      if (!(squared < point_radius * point_radius)) return;
+      cells_.for_each_candidate(low, high, [&](Index k) {
+        const Real* p = points + 3 * k;
+        const Real offset[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        Real squared = 0.0;
+        for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
+        const Real inverse = node_inverse_radii[3 * k] * inverse_factor;
+        if (!(squared * inverse * inverse < 1.0)) return;
+        const Real inverses[3] = {inverse, inverse, inverse};
+        accept(order[k], offset, inverses);
+      });
     }
-    accept(index, offset, inverses);
-  };
-  if (options_.mode == SupportMode::nearest) {
-    reserve(static_cast<Index>(workspace.nearest.size()));
-    for (const auto& [distance_squared, index] : workspace.nearest) {
-      const Real offset[3] = {x[0] - projected_(0, index), x[1] - projected_(1, index), x[2] - projected_(2, index)};
-      consider(index, offset);
+    // Basis scaling rho_d: the largest support radius among the neighbours.
+    // (four independent minima per direction: one serial chain of min would cost its latency per neighbour)
+    for (int d = 0; d < 3; ++d) {
+      Real smallest[4];
+      std::fill_n(smallest, 4, std::numeric_limits<Real>::infinity());
+      const Real* inverse = inverse_radii + d * stride;
+      std::size_t j = 0;
+      for (; j + 4 <= count; j += 4)
+        for (int l = 0; l < 4; ++l) smallest[l] = std::min(smallest[l], inverse[j + static_cast<std::size_t>(l)]);
+      for (; j < count; ++j) smallest[0] = std::min(smallest[0], inverse[j]);
+      rho[d] = 1.0 / std::min(std::min(smallest[0], smallest[1]), std::min(smallest[2], smallest[3]));
     }
   } else {
-    const Vec3 reach = Vec3::Constant(point_radius);
-    reserve(cells_.count_candidates(x - reach, x + reach));
-    cells_.for_each_candidate(x - reach, x + reach, [&](Index k) {
-      const Real offset[3] = {x[0] - sorted(0, k), x[1] - sorted(1, k), x[2] - sorted(2, k)};
-      consider(order[k], offset);
-    });
+    cells_.nearest(x, nearest_count, workspace.nearest);
+    const Real point_radius = workspace.nearest.empty()
+                                  ? 0.0
+                                  : options_.scale * (1.0 + support_epsilon) * std::sqrt(workspace.nearest.back().first);
+    if (!(point_radius > 0.0)) return 0;
+    const Real inverse = 1.0 / point_radius;
+    const Real inverses[3] = {inverse, inverse, inverse};
+    auto consider = [&](Index index, const Real* offset) {
+      if (box) {
+        for (int d = 0; d < Dim; ++d)
+          if (!(std::abs(offset[d]) < point_radius)) return;
+      } else {
+        Real squared = 0.0;
+        for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
+        if (!(squared < point_radius * point_radius)) return;
+      }
+      accept(index, offset, inverses);
+    };
+    if (options_.mode == SupportMode::nearest) {
+      reserve(static_cast<Index>(workspace.nearest.size()));
+      for (const auto& [distance_squared, index] : workspace.nearest) {
+        const Real offset[3] = {x[0] - projected_(0, index), x[1] - projected_(1, index), x[2] - projected_(2, index)};
+        consider(index, offset);
+      }
+    } else {
+      const Vec3 reach = Vec3::Constant(point_radius);
+      reserve(cells_.count_candidates(x - reach, x + reach));
+      cells_.for_each_candidate(x - reach, x + reach, [&](Index k) {
+        const Real offset[3] = {x[0] - sorted(0, k), x[1] - sorted(1, k), x[2] - sorted(2, k)};
+        consider(order[k], offset);
+      });
+    }
+    rho.setConstant(point_radius);
   }
-  rho.setConstant(point_radius);
+  for (int d = 0; d < 3; ++d)
+    if (!(rho[d] > 0.0) || !std::isfinite(rho[d])) rho[d] = 1.0;
 
-  // Neighbours in ascending index order, rows of n (structure of arrays).
+  // Neighbours in ascending index order (the cells deliver structured grids already sorted).
   const auto n = count;
+  // rows of n (structure of arrays)
   workspace.indices.resize(n);
   grow(workspace.offsets, 3 * n);
   grow(workspace.inverse_radii, 3 * n);
-  std::sort(candidates, candidates + n);
-  for (std::size_t j = 0; j < n; ++j) {
-    const auto [index, slot] = candidates[j];
-    workspace.indices[j] = index;
+  if (std::is_sorted(candidates, candidates + n)) {
+    for (std::size_t j = 0; j < n; ++j) workspace.indices[j] = candidates[j].first;
     for (int d = 0; d < 3; ++d) {
-      workspace.offsets[d * n + j] = offsets[d * stride + static_cast<std::size_t>(slot)];
-      workspace.inverse_radii[d * n + j] = inverse_radii[d * stride + static_cast<std::size_t>(slot)];
+      std::copy_n(offsets + d * stride, n, workspace.offsets.data() + d * n);
+      std::copy_n(inverse_radii + d * stride, n, workspace.inverse_radii.data() + d * n);
     }
-  }
-  return static_cast<Index>(n);
-}
-
-template <int Dim>
-Index MlsShapeFunctions::gather_node_centred(const Vec3& x, Real radius_factor, detail::MlsWorkspace& workspace,
-                                             Vec3& rho) const {
-  const bool box = options_.shape == SupportShape::box;
-  const std::size_t stride = sorted_stride_;
-  const Real* coordinate[3] = {sorted_nodes_.data(), sorted_nodes_.data() + stride, sorted_nodes_.data() + 2 * stride};
-  const Real* node_inverse_radius[3] = {sorted_nodes_.data() + 3 * stride, sorted_nodes_.data() + 4 * stride,
-                                        sorted_nodes_.data() + 5 * stride};
-  const Index* order = cells_.order().data();
-  const Real inverse_factor = 1.0 / radius_factor;
-  const Vec3 reach = max_radius_ * radius_factor;
-
-  // Pass 1: the cell-order positions k of the nodes whose support holds x, in chunks of a fixed
-  // length (a row of cells holds a few nodes; a variable trip count would cost a mispredicted branch
-  // per row): the test vectorises over the chunk, then every position is written and kept only if
-  // inside. Positions past the row's end read the zero padding and are rejected.
-  std::size_t count = 0;
-  cells_.for_each_candidate_row(x - reach, x + reach, [&](Index begin, Index end) {
-    grow(workspace.positions, count + static_cast<std::size_t>(end - begin) + candidate_chunk);
-    Index* kept = workspace.positions.data();
-    for (Index base = begin; base < end; base += candidate_chunk) {
-      for (int lane = 0; lane < candidate_chunk; lane += 4) {
-        const Index k = base + lane;
-        Mask4 inside = Mask4{k, k + 1, k + 2, k + 3} < end;
-        if (box) {
-          for (int d = 0; d < Dim; ++d) {
-            const Real4 offset = x[d] - load4(coordinate[d] + k);
-            const Real4 distance = offset < 0.0 ? -offset : offset;
-            inside &= distance * (load4(node_inverse_radius[d] + k) * inverse_factor) < 1.0;
-          }
-        } else {
-          Real4 squared = {0.0, 0.0, 0.0, 0.0};
-          for (int d = 0; d < Dim; ++d) {
-            const Real4 offset = x[d] - load4(coordinate[d] + k);
-            squared += offset * offset;
-          }
-          const Real4 inverse = load4(node_inverse_radius[0] + k) * inverse_factor;
-          inside &= squared * inverse * inverse < 1.0;
-        }
-        for (int l = 0; l < 4; ++l) {
-          kept[count] = k + l;
-          count += static_cast<std::size_t>(inside[l] & 1);
-        }
+  } else {
+    std::sort(candidates, candidates + n);
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto [index, slot] = candidates[j];
+      workspace.indices[j] = index;
+      for (int d = 0; d < 3; ++d) {
+        workspace.offsets[d * n + j] = offsets[d * stride + static_cast<std::size_t>(slot)];
+        workspace.inverse_radii[d * n + j] = inverse_radii[d * stride + static_cast<std::size_t>(slot)];
       }
     }
-  });
-
-  // Pass 2: the neighbours in ascending node order (the cells deliver structured grids sorted),
-  // their offsets x - x_I and inverse radii, rows of n (structure of arrays).
-  const std::size_t n = count;
-  const Index* kept = workspace.positions.data();
-  workspace.indices.resize(n);
-  grow(workspace.offsets, 3 * n);
-  grow(workspace.inverse_radii, 3 * n);
-  Index* indices = workspace.indices.data();
-  bool sorted = true;
-  for (std::size_t j = 0; j < n; ++j) {
-    indices[j] = order[kept[j]];
-    sorted &= j == 0 || indices[j - 1] < indices[j];
-  }
-  const Index* positions = kept;
-  if (!sorted) {
-    grow(workspace.candidates, n);
-    auto* pairs = workspace.candidates.data();
-    for (std::size_t j = 0; j < n; ++j) pairs[j] = {indices[j], kept[j]};
-    std::sort(pairs, pairs + n);
-    for (std::size_t j = 0; j < n; ++j) {
-      indices[j] = pairs[j].first;
-      workspace.positions[j] = pairs[j].second;
-    }
-  }
-  Real* offsets = workspace.offsets.data();
-  Real* inverse_radii = workspace.inverse_radii.data();
-  for (int d = 0; d < 3; ++d) {
-    const Real* node_coordinate = coordinate[d];
-    const Real* node_inverse = node_inverse_radius[box ? d : 0];  // a sphere has one radius
-    Real* offset = offsets + d * n;
-    Real* inverse = inverse_radii + d * n;
-    for (std::size_t j = 0; j < n; ++j) {
-      const Index k = positions[j];
-      offset[j] = x[d] - node_coordinate[k];
-      inverse[j] = node_inverse[k] * inverse_factor;
-    }
-    // Basis scaling rho_d: the largest support radius among the neighbours (four independent minima:
-    // one serial chain of min would cost its latency per neighbour).
-    Real smallest[4];
-    std::fill_n(smallest, 4, std::numeric_limits<Real>::infinity());
-    std::size_t j = 0;
-    for (; j + 4 <= n; j += 4)
-      for (int l = 0; l < 4; ++l) smallest[l] = std::min(smallest[l], inverse[j + static_cast<std::size_t>(l)]);
-    for (; j < n; ++j) smallest[0] = std::min(smallest[0], inverse[j]);
-    rho[d] = 1.0 / std::min(std::min(smallest[0], smallest[1]), std::min(smallest[2], smallest[3]));
-    if (!(rho[d] > 0.0) || !std::isfinite(rho[d])) rho[d] = 1.0;
   }
   return static_cast<Index>(n);
 }
@@ -645,8 +589,8 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   VectorMap combined(scratch + 4 * n, n);
   auto first_projection = [&](int i) { return VectorMap(scratch + (1 + i) * n, n); };  // p_I . r_,i
 
-  // Two equivalent ways to apply A^-1 (A^-1 = T^T T, T = L^-1 S from the factorisation):
-  //  direct:       basis rows p_I, right-hand sides g as they are, solve(h) = T^T (T h);
+  // Two equivalent ways to apply A^-1 (= S A_s^-1 S = T^T T, T = L^-1 S with A_s = L L^T):
+  //  direct:       basis rows p_I, right-hand sides g as they are, solve(h) = S A_s^-1 S h;
   //  orthonormal:  basis rows q_I = T p_I (orthonormalised once more, T <- T2 T), right-hand sides
   //                T g, solve(h) = h -- used above orthonormalise_condition for accuracy.
   const bool orthonormal = out.condition > orthonormalise_condition;

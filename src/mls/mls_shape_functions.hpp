@@ -105,9 +105,6 @@ class MlsShapeFunctions {
   template <int Dim>
   Index gather(const Vec3& x, Real radius_factor, Index nearest_count, detail::MlsWorkspace& workspace,
                Vec3& rho) const;
-  /// gather() for the supports centred on the nodes (modes kappa, fixed_radius, all).
-  template <int Dim>
-  Index gather_node_centred(const Vec3& x, Real radius_factor, detail::MlsWorkspace& workspace, Vec3& rho) const;
   [[noreturn]] void throw_singular(const Vec3& x, Index neighbours, Real condition, bool remedy) const;
 
   PointMatrix nodes_;             // as given
@@ -116,11 +113,7 @@ class MlsShapeFunctions {
   int basis_size_ = 0;
   Eigen::Matrix3Xd spacing_;
   Eigen::Matrix3Xd radii_;        // node-centred modes: per node and axis (original order)
-  /// Node-centred supports: rows x, y, z, 1/R_x, 1/R_y, 1/R_z of the nodes in the cell list's order
-  /// (unused axes: 0), row r at r * sorted_stride_, each padded with candidate_chunk zeros.
-  static constexpr int candidate_chunk = 8;
-  std::vector<Real> sorted_nodes_;
-  std::size_t sorted_stride_ = 0;
+  Eigen::Matrix3Xd sorted_inverse_radii_;  // 1 / radii_ in the cell list's order (unused axes: 0)
   Vec3 max_radius_ = Vec3::Zero();
   CellList cells_;
 };

@@ -28,15 +28,6 @@ class CellList {
   /// (a superset of the points inside; the caller filters).
   template <class Visitor>
   void for_each_candidate(const Vec3& low, const Vec3& high, Visitor&& visit) const {
-    for_each_candidate_row(low, high, [&](Index begin, Index end) {
-      for (Index k = begin; k < end; ++k) visit(k);
-    });
-  }
-
-  /// The same by x-rows of cells: visit(begin, end) for the contiguous positions begin..end-1 of each
-  /// row of cells that overlaps [low, high] (rows in cell order, so positions ascend).
-  template <class Visitor>
-  void for_each_candidate_row(const Vec3& low, const Vec3& high, Visitor&& visit) const {
     if (order_.empty()) return;
     int first[3];
     int last[3];
@@ -50,7 +41,7 @@ class CellList {
         const Index row = (static_cast<Index>(z) * counts_[1] + y) * counts_[0];
         const Index begin = cell_start_[row + first[0]];
         const Index end = cell_start_[row + last[0] + 1];
-        if (end > begin) visit(begin, end);
+        for (Index k = begin; k < end; ++k) visit(k);
       }
     }
   }
