@@ -1,8 +1,7 @@
 #pragma once
-// Factorisation of the m x m MLS moment matrix A (seed 004, A r = p of eqs 1-18/1-19): Jacobi-scaled dense
-// Cholesky in fixed-size storage, condition estimate, and the map to a weighted-orthonormal basis.
+// Inverse of the m x m MLS moment matrix A (seed 004, A r = p of eqs 1-18/1-19): Jacobi-scaled Gauss-Jordan
+// in fixed-size vector storage, condition estimate, and the map to a weighted-orthonormal basis.
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -10,8 +9,8 @@
 
 namespace lamina::mls {
 
-/// Inverts the Jacobi-scaled A_s = S A S (S = diag(1/sqrt(A_aa))) by symmetric Gauss-Jordan elimination,
-/// so that A^-1 = S A_s^-1 S; on request forms T = L^-1 S from A_s = L L^T, so that A^-1 = T^T T and the
+/// Inverts the Jacobi-scaled A_s = S A S (S = diag(1/sqrt(A_aa))) by Gauss-Jordan elimination without
+/// pivoting (A_s is symmetric positive definite), so that A^-1 = S A_s^-1 S; on request forms T = L^-1 S from A_s = L L^T, so that A^-1 = T^T T and the
 /// basis q = T p is orthonormal for the weighted inner product that defines A.
 /// Condition estimate: ||A_s||_1 * trace(A_s^-1) (= ||A_s||_1 ||L^-1||_F^2), an upper bound of the
 /// 2-norm condition number of A_s, at most m^1.5 times too large.
@@ -76,7 +75,7 @@ class MomentMatrixFactor {
   /// Condition estimate of the Jacobi-scaled A (infinity if factor() stopped early).
   Real condition() const { return condition_; }
 
-  /// T = L^-1 S (lower triangular), formed on the first call after factor().
+  /// T = L^-1 S (lower triangular), formed on the first call after a successful factor().
   const Matrix& transform() const {
     if (!has_transform_) form_transform();
     return transform_;
