@@ -11,7 +11,6 @@ namespace lamina::parallel {
 
 namespace {
 bool mpi_started = false;
-const MpiModule* module = nullptr;
 
 std::vector<std::function<void()>>& finalize_hooks() {
   static std::vector<std::function<void()>> hooks;
@@ -30,13 +29,17 @@ void reduce_in_place(std::vector<Real>& values, Reduction op) {
 }  // namespace
 
 const MpiModule& mpi_module() {
-  if (module) return *module;
-  std::string why;
-  module = open_module_table<MpiModule>(LAMINA_MPI_TRANSPORT_NAME, LAMINA_MPI_TRANSPORT_PATH, "lamina_mpi_transport",
-                                        MpiModule::abi_version, why);  // stays loaded until the process ends
-  if (!module)
-    throw SolverUnavailable("the MPI module " + std::string(LAMINA_MPI_TRANSPORT_NAME) + " could not be loaded: " + why);
-  return *module;
+  // Opened by the first call, once even if threads race to it (a function-local static); a failed load
+  // throws and the next call tries again. Stays loaded until the process ends.
+  static const MpiModule* const loaded = [] {
+    std::string why;
+    const MpiModule* table = open_module_table<MpiModule>(LAMINA_MPI_TRANSPORT_NAME, LAMINA_MPI_TRANSPORT_PATH,
+                                                          "lamina_mpi_transport", MpiModule::abi_version, why);
+    if (!table)
+      throw SolverUnavailable("the MPI module " + std::string(LAMINA_MPI_TRANSPORT_NAME) + " could not be loaded: " + why);
+    return table;
+  }();
+  return *loaded;
 }
 
 Environment::Environment(int& argc, char**& argv) {
