@@ -10,8 +10,9 @@
 namespace lamina::mls {
 
 /// Inverts the Jacobi-scaled A_s = S A S (S = diag(1/sqrt(A_aa))) by Gauss-Jordan elimination without
-/// pivoting (A_s is symmetric positive definite), so that A^-1 = S A_s^-1 S; on request forms T = L^-1 S from A_s = L L^T, so that A^-1 = T^T T and the
-/// basis q = T p is orthonormal for the weighted inner product that defines A.
+/// pivoting (A_s is symmetric positive definite), so that A^-1 = S A_s^-1 S. On request forms
+/// T = L^-1 S from A_s = L L^T, so that A^-1 = T^T T and the basis q = T p is orthonormal for the
+/// weighted inner product that defines A.
 /// Condition estimate: ||A_s||_1 * trace(A_s^-1) (= ||A_s||_1 ||L^-1||_F^2), an upper bound of the
 /// 2-norm condition number of A_s, at most m^1.5 times too large.
 template <int M>
@@ -28,7 +29,7 @@ class MomentMatrixFactor {
     condition_ = std::numeric_limits<Real>::infinity();
     has_transform_ = false;
     // S as vectors of four (vector square roots and divisions; padding lanes 1).
-    Real4 scale[blocks];
+    Real4* scale = scale_;
     for (int b = 0; b < blocks; ++b) {
       Real4 diagonal;
       for (int l = 0; l < 4; ++l) diagonal[l] = 4 * b + l < M ? a(4 * b + l, 4 * b + l) : 1.0;
@@ -37,7 +38,6 @@ class MomentMatrixFactor {
       scale[b] = 1.0 / Real4{std::sqrt(diagonal[0]), std::sqrt(diagonal[1]), std::sqrt(diagonal[2]),
                              std::sqrt(diagonal[3])};
     }
-    for (int b = 0; b < blocks; ++b) scale_[b] = scale[b];
     // A_s = S A S by rows (column i of the column-major A is row i of the symmetric A), padded with
     // zeros; its 1-norm (the largest row sum of |A_s|).
     Real norm = 0.0;
