@@ -16,6 +16,7 @@
 #include "core/stopwatch.hpp"
 #include "pd/force_split.hpp"
 #include "pd/lean_peridynamic_solid.hpp"
+#include "pd/kirchhoff_plate.hpp"
 #include "pd/peridynamic_plate.hpp"
 #include "pd/zero_energy_check.hpp"
 #include "solve/sparse_cholesky.hpp"
@@ -162,10 +163,17 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
     BodyOptions probe_options = options;
     probe_options.surface_correction = SurfaceCorrection::none;
     body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, probe_options);
-    auto plate = std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+    if (columns->layers == 1) {
+      auto plate = std::make_unique<KirchhoffPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
                                                     problem_.young, problem_.poisson, options);
-    plate_columns_ = &plate->columns();
-    model_ = std::move(plate);
+      plate_columns_ = &plate->columns();
+      model_ = std::move(plate);
+    } else {
+      auto plate = std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions,
+                                                      problem_.volumes, problem_.young, problem_.poisson, options);
+      plate_columns_ = &plate->columns();
+      model_ = std::move(plate);
+    }
   } else {
     BodyOptions body_options = options;
     body_options.lean_bonds = lean_bond_storage();

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "material/linear_elastic.hpp"
+#include "pd/plate_fit.hpp"
 
 namespace lamina::pd {
 
@@ -159,33 +160,12 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
 }
 
 int PeridynamicPlate::gradient_weights(Index b0, Index b1, Real horizon) {
-  // Polynomial (no constant) least squares over the family, weights v_b: the gradient at the column
-  // is sum_b v_b (f_j - f_i) B_b with B_b the first two rows of (V^T W V)^-1 phi(xi_b). Degree 3
-  // where the family carries it (exact gradients of cubic fields: no nonlocal softening of a smooth
-  // bending mode, no one-sided bias at an edge), else 2, else 1 (plain correspondence).
-  const Index count = b1 - b0;
-  for (int degree = 3; degree >= 1; --degree) {
-    const int terms = degree == 3 ? 9 : degree == 2 ? 5 : 2;
-    if (degree > 1 && count < terms + 2) continue;
-    Eigen::MatrixXd basis(terms, count);
-    for (Index b = b0; b < b1; ++b) {
-      const Real x = xi_(0, b) / horizon, y = xi_(1, b) / horizon;
-      Eigen::VectorXd phi(terms);
-      phi.head<2>() << x, y;
-      if (degree >= 2) phi.segment<3>(2) << x * x, x * y, y * y;
-      if (degree >= 3) phi.segment<4>(5) << x * x * x, x * x * y, x * y * y, y * y * y;
-      basis.col(b - b0) = phi;
-    }
-    const Eigen::MatrixXd gram = basis * v_.segment(b0, count).asDiagonal() * basis.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram);
-    const Real smallest = eig.eigenvalues()[0], largest = eig.eigenvalues()[terms - 1];
-    if (degree > 1 && !(smallest > 1e-7 * largest)) continue;
-    const Eigen::MatrixXd solved = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                                   eig.eigenvectors().transpose() * basis;  // terms x count
-    for (Index b = b0; b < b1; ++b) shape_b_.col(b) = solved.topRows<2>().col(b - b0) / horizon;
-    return degree;
-  }
-  return 1;
+  // degree 3 where the family carries it (exact gradients of cubic fields: no nonlocal softening of a
+  // smooth bending mode, no one-sided bias at an edge), else 2, else 1 (plain correspondence)
+  Eigen::Matrix2Xd first;
+  const int degree = plate_fit_weights(xi_.middleCols(b0, b1 - b0), v_.segment(b0, b1 - b0), horizon, 3, first);
+  shape_b_.middleCols(b0, b1 - b0) = first;
+  return degree;
 }
 
 void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*linearised*/) const {

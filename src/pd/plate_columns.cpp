@@ -41,12 +41,32 @@ std::optional<PlateColumns> find_plate_columns(const PointMatrix& positions, con
     for (Index i : list) c.node.push_back(i);
     c.first.push_back(static_cast<Index>(c.node.size()));
   }
-  if (c.layers < 2 || c.layers > 4) return refuse(fmt::format("{} node layers (the plate model takes 2-4)", c.layers));
-  const Real dz = (heights.back() - heights.front()) / (c.layers - 1);
-  for (int k = 1; k < c.layers; ++k)
-    if (std::abs(heights[static_cast<std::size_t>(k)] - heights[static_cast<std::size_t>(k - 1)] - dz) > 1e-6 * dz)
-      return refuse("unevenly spaced layers");
-  c.thickness = c.layers * dz;
+  if (c.layers < 1 || c.layers > 4) return refuse(fmt::format("{} node layers (the plate models take 1-4)", c.layers));
+  if (c.layers == 1) {
+    // one layer: the thickness is the cells' height, volume / in-plane cell area (the smallest steps
+    // between distinct column coordinates in x and in y)
+    std::vector<Real> xs, ys;
+    for (const auto& [key, list] : groups) {
+      xs.push_back(positions(0, list.front()));
+      ys.push_back(positions(1, list.front()));
+    }
+    auto step = [&](std::vector<Real>& values) {
+      std::sort(values.begin(), values.end());
+      Real smallest = INFINITY;
+      for (std::size_t k = 1; k < values.size(); ++k)
+        if (values[k] - values[k - 1] > 1e3 * tolerance) smallest = std::min(smallest, values[k] - values[k - 1]);
+      return smallest;
+    };
+    const Real area = step(xs) * step(ys);
+    if (!std::isfinite(area)) return refuse("a single row of nodes (not a plate)");
+    c.thickness = volumes.mean() / area;
+  } else {
+    const Real dz = (heights.back() - heights.front()) / (c.layers - 1);
+    for (int k = 1; k < c.layers; ++k)
+      if (std::abs(heights[static_cast<std::size_t>(k)] - heights[static_cast<std::size_t>(k - 1)] - dz) > 1e-6 * dz)
+        return refuse("unevenly spaced layers");
+    c.thickness = c.layers * dz;
+  }
   if (upper.x() - lower.x() < 3 * c.thickness || upper.y() - lower.y() < 3 * c.thickness)
     return refuse("in-plane extent below 4 thicknesses (a solid, not a plate)");
   const Index columns = c.columns();
@@ -73,7 +93,7 @@ std::optional<PlateColumns> find_plate_columns(const PointMatrix& positions, con
     for (Index p = c.first[col]; p < c.first[col + 1]; ++p) {
       const Index i = c.node[p];
       c.phi[i] = volumes[i] / volume;
-      c.psi[i] = volumes[i] * c.zeta[i] / moment;
+      c.psi[i] = moment > 0 ? volumes[i] * c.zeta[i] / moment : 0.0;
     }
     const Vec3 x = positions.col(c.node[c.first[col]]);
     if (col > 0) spacing = std::min(spacing, (x - previous).head<2>().norm());
