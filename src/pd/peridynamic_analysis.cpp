@@ -343,7 +343,7 @@ void PeridynamicAnalysis::check_unloaded_stiffness(const solve::SparseMatrix& k0
                   model_->name(), r.smallest, x.x(), x.y(), x.z(),
                   model_->name() == "plate"
                       ? "give the horizon at least 1.4 in-plane spacings"
-                      : "use a horizon above the cell diagonal, or the plate model for a 2-4 layer plate (pd.plate_model: auto)"));
+                      : "use a horizon above the cell diagonal, or the plate models for a 1-4 layer plate (pd.plate_model: auto)"));
 }
 
 void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {

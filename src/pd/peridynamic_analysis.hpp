@@ -106,7 +106,7 @@ class PeridynamicAnalysis : public Analysis {
   Real distributed_probe(const Probe& probe) const;
   /// Refuses (InputError) what a distributed run does not do, before the partition.
   void check_distributable() const;
-  /// The body is a 2-4 layer plate lattice that the director plate model will discretise.
+  /// The body is a 1-4 layer plate lattice that a plate model (director: 2-4 layers, Kirchhoff: one) will discretise.
   bool plate_lattice() const;
   /// Several ranks without a node partition (quasi_static: replicated data, split work): from now on the
   /// model computes the internal forces of this rank's block of nodes only (on, force_split.hpp), or every

@@ -42,7 +42,8 @@ enum class Influence { one, inverse_distance };            // omega = 1 | delta 
 enum class Kinematics { three_dimensional, plane_stress, plane_strain };
 enum class SurfaceCorrection { none, energy, plate };
 /// automatic: a 2-4 layer plate lattice (plate_columns.hpp) gets the director plate model
-/// (peridynamic_plate.hpp), any other body the lattice model; lattice: always the lattice model.
+/// (peridynamic_plate.hpp), a one-layer plate lattice the Kirchhoff plate model (kirchhoff_plate.hpp), any
+/// other body the lattice model; lattice: always the lattice model.
 enum class PlateModel { automatic, lattice };
 /// A node's part on one rank of a distributed run (pd/rank_nodes.hpp): its own, a halo node whose
 /// dilatation this rank computes (within one reach of an owned node), or a halo node that only

@@ -1,9 +1,10 @@
 #pragma once
 // PeridynamicModel: what the pd analyses (linear static, adaptive dynamic relaxation, explicit
 // dynamics, linear buckling) need of a constitutive model over the nodes: internal forces, strain
-// energy and stiffness of a displacement field. Two models implement it: LinearPeridynamicSolid (the
-// node lattice, linear_peridynamic_solid.hpp) and PeridynamicPlate (the director plate model of
-// 2-4 layer plate lattices, peridynamic_plate.hpp).
+// energy and stiffness of a displacement field. Implemented by LinearPeridynamicSolid (the node lattice,
+// linear_peridynamic_solid.hpp; LeanPeridynamicSolid without stored bonds), PeridynamicPlate (the
+// director plate model of 2-4 layer plate lattices, peridynamic_plate.hpp) and KirchhoffPlate (one-layer
+// plate lattices, kirchhoff_plate.hpp).
 #include <memory>
 #include <string>
 

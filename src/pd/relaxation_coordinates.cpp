@@ -12,6 +12,7 @@ RelaxationCoordinates column_coordinates(const PlateColumns& columns, Index node
   std::vector<Eigen::Triplet<Real, int>> t, ti;
   for (Index c = 0; c < columns.columns(); ++c) {
     const Index p0 = columns.first[static_cast<std::size_t>(c)], count = columns.first[static_cast<std::size_t>(c) + 1] - p0;
+    if (count < 2) continue;  // a one-layer column has no modes to map: its node keeps its own dofs
     // the column modes: uniform (mid-surface), linear in the height (director), and an orthonormal
     // completion (layer residuals); T's block maps mode amplitudes to the layer displacements
     Eigen::MatrixXd block(count, count);
@@ -31,7 +32,7 @@ RelaxationCoordinates column_coordinates(const PlateColumns& columns, Index node
       bool all_free = true;
       for (Index k = 0; k < count; ++k)
         all_free = all_free && node_free[static_cast<std::size_t>(3 * columns.node[static_cast<std::size_t>(p0 + k)] + a)];
-      if (!all_free || count < 2) continue;
+      if (!all_free) continue;
       ++rc.mapped_groups;
       for (Index r = 0; r < count; ++r) {
         const Index row = 3 * columns.node[static_cast<std::size_t>(p0 + r)] + a;

@@ -174,3 +174,39 @@ TEST(KirchhoffPlate, SimplySupportedSquareBucklesAtTheClassicalLoad) {
   const Real classical = 4 * M_PI * M_PI * d / (200.0 * 200.0) * 205.0;
   EXPECT_NEAR(analysis.eigenvalues().front() * 41 / classical, 1.0, 0.03);
 }
+
+// Adaptive dynamic relaxation of a one-layer plate (column coordinates on one-node columns) reaches the
+// linear static deflection of a simply supported square under a small pressure.
+TEST(KirchhoffPlate, RelaxationReachesTheLinearStaticDeflection) {
+  auto problem = [](PdAnalysisKind kind) {
+    PeridynamicProblem p;
+    const PointCloud cloud = lattice_point_cloud(make_cell_lattice(Vec3(-2.5, -2.5, -1), Vec3(62.5, 62.5, 1), Vec3(5, 5, 2)), true);
+    const Index n = cloud.size();
+    p.positions = cloud.positions;
+    p.volumes = cloud.volumes;
+    p.young = Eigen::VectorXd::Constant(n, young);
+    p.poisson = Eigen::VectorXd::Constant(n, poisson);
+    p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
+    p.body.horizon = 3.015 * 5;
+    p.analysis = kind;
+    p.relaxation.increments = 1;
+    p.relaxation.tolerance = 1e-7;
+    for (Index k = 0; k < n; ++k) {
+      const Vec3 x = cloud.positions.col(k);
+      const bool edge = x.x() < 1 || x.x() > 59 || x.y() < 1 || x.y() > 59;
+      if (edge) {
+        for (int a = 0; a < 3; ++a) p.prescribed.push_back({k, a, 0.0});
+      } else {
+        p.forces.push_back({k, Vec3(0, 0, -1e-4 * 25)});  // q = 1e-4 MPa on the node's 5 x 5 mm cell
+      }
+    }
+    return p;
+  };
+  PeridynamicAnalysis relaxed(problem(PdAnalysisKind::quasi_static), {});
+  relaxed.solve();
+  PeridynamicAnalysis linear(problem(PdAnalysisKind::linear_static), {});
+  linear.solve();
+  const Real w_relaxed = relaxed.displacement().row(2).minCoeff(), w_linear = linear.displacement().row(2).minCoeff();
+  EXPECT_LT(w_linear, 0);
+  EXPECT_NEAR(w_relaxed / w_linear, 1.0, 1e-3);
+}
