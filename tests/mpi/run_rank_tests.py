@@ -5,7 +5,7 @@
     column's largest magnitude), the counts in summary.json are equal;
   - each VTU frame is a .pvtu of N pieces whose points add up to the body's nodes;
   - the mpm runs (element decomposition) and the pd ADR runs (the seed's plate on the plate model, a 3D
-    bar lattice; forces split) are those of one process, bit for bit;
+    bar lattice; forces split; a one-layer plate, forces replicated) are those of one process, bit for bit;
   - a pd explicit, a pd ADR and an mpm run on 2 ranks restarted from a checkpoint repeat the uninterrupted
     history bit for bit;
   - the pd plate model under explicit dynamics (forces split) is that of one process, bit for bit;
@@ -88,7 +88,11 @@ history_cases += [(os.path.join(source, "validation/mpm_cantilever_shear/case.ya
                   (os.path.join(source, "validation/pd_plate_tension/case.yaml"),
                    {"adr": [], "explicit": ["--set", "pd.analysis=explicit", "--set", "pd.explicit.end_time=2e-5",
                                             "--set", "pd.explicit.outputs=4"]}),
-                  (os.path.join(source, "validation/pd_bar_tension/case.yaml"), {"adr": []})]
+                  (os.path.join(source, "validation/pd_bar_tension/case.yaml"), {"adr": []}),
+                  # the one-layer plate (Kirchhoff plate model: forces computed whole on every rank)
+                  (os.path.join(source, "validation/pd_plate_one_layer_bending/case.yaml"),
+                   {"adr": ["--set", "pd.analysis=quasi_static", "--set", "pd.quasi_static={increments: 1, tolerance: 1e-7}",
+                            "--set", "output.vtu=false"]})]
 for case, variants in history_cases:
     name = os.path.basename(case) if os.path.dirname(case) == case_dir else case.split("/")[-2]
     for variant, extra in variants.items():
