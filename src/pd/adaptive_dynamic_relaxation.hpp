@@ -55,6 +55,8 @@ class AdaptiveDynamicRelaxation {
   /// Force decomposition over ranks: the model computed the internal force of this rank's nodes only;
   /// complete(F) fills in the others' (an all-gather). Unset: the force is whole.
   void set_force_completion(std::function<void(PointMatrix&)> complete) { complete_force_ = std::move(complete); }
+  /// Multiplies the fictitious density by factor (after a block that diverged: the tangent outgrew it).
+  void scale_density(Real factor) { lambda_ *= factor; }
 
  private:
   const PeridynamicModel& solid_;

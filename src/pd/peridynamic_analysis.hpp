@@ -154,6 +154,7 @@ class PeridynamicAnalysis : public Analysis {
     PointMatrix previous, before_previous, third, generalized_force;  // converged fields at factor, previous_factor, third_factor
     bool have_two = false, have_three = false;
     int cuts = 0;
+    int density_doublings = 0;           // times the ADR density was doubled after a diverged block
     Index increment = 0;
   } quasi_;
   struct ExplicitLoop {

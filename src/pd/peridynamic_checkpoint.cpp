@@ -49,6 +49,7 @@ void PeridynamicAnalysis::state_fields(Self& self, Archive& a) {
     a.field("pd.qs.third_factor", q.third_factor);
     a.field("pd.qs.have_three", q.have_three);
     a.field("pd.qs.cuts", q.cuts);
+    a.field("pd.qs.density_doublings", q.density_doublings);
     a.field("pd.qs.increment", q.increment);
   } else {
     auto& e = self.explicit_;
@@ -156,7 +157,8 @@ void PeridynamicAnalysis::restore_state(const StateReader& in) {
   require(steps_ >= 0, "step count");
   if (problem_.analysis == PdAnalysisKind::quasi_static)
     require(quasi_.step > 0 && quasi_.step <= 1 && quasi_.factor >= 0 && quasi_.factor <= 1 && quasi_.increment >= 0 &&
-                quasi_.cuts >= 0 && std::isfinite(quasi_.previous_factor),
+                quasi_.cuts >= 0 && quasi_.density_doublings >= 0 && quasi_.density_doublings <= 4 &&
+                std::isfinite(quasi_.previous_factor),
             "load-stepping state");
   else
     require(explicit_.step >= 0 && explicit_.origin_step >= 0 && explicit_.origin_step <= explicit_.step &&

@@ -210,3 +210,50 @@ TEST(KirchhoffPlate, RelaxationReachesTheLinearStaticDeflection) {
   EXPECT_LT(w_linear, 0);
   EXPECT_NEAR(w_relaxed / w_linear, 1.0, 1e-3);
 }
+
+
+// Past the buckling load a one-layer plate rotates, and part of its in-plane stiffness enters the global
+// z dofs, whose ADR density comes from the bending-scale K0: a block diverges. The analysis doubles the
+// density, restarts the increment and reaches the equilibrium a run with twice the density from the start
+// reaches.
+TEST(KirchhoffPlate, DivergedRelaxationDoublesTheDensityAndReachesEquilibrium) {
+  auto solve = [](Real density_factor) {
+    PeridynamicProblem p;
+    const PointCloud cloud = lattice_point_cloud(make_cell_lattice(Vec3(-5, -5, -1), Vec3(105, 105, 1), Vec3(10, 10, 2)), true);
+    const Index n = cloud.size();
+    p.positions = cloud.positions;
+    p.volumes = cloud.volumes;
+    p.young = Eigen::VectorXd::Constant(n, young);
+    p.poisson = Eigen::VectorXd::Constant(n, poisson);
+    p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
+    p.body.horizon = 3.015 * 10;
+    p.analysis = PdAnalysisKind::quasi_static;
+    p.relaxation.increments = 4;
+    p.relaxation.max_iterations = 4000;
+    p.relaxation.density_factor = density_factor;
+    p.imperfection.kind = Imperfection::Kind::buckling_mode;
+    p.imperfection.amplitude = 0.2;
+    Index centre = -1, corner = -1, right = -1;
+    for (Index k = 0; k < n; ++k) {
+      const Vec3 x = cloud.positions.col(k);
+      if (x.x() < 1 || x.x() > 99 || x.y() < 1 || x.y() > 99) p.prescribed.push_back({k, 2, 0.0});
+      if (x.x() > 99) p.forces.push_back({k, Vec3(-40000.0 / 11, 0, 0)});  // about 2 x the buckling load
+      if (x.x() < 1) p.forces.push_back({k, Vec3(40000.0 / 11, 0, 0)});
+      if ((x - Vec3(50, 50, 0)).norm() < 1e-9) centre = k;
+      if ((x - Vec3(0, 0, 0)).norm() < 1e-9) corner = k;
+      if ((x - Vec3(100, 0, 0)).norm() < 1e-9) right = k;
+    }
+    p.prescribed.push_back({centre, 0, 0.0});
+    p.prescribed.push_back({corner, 1, 0.0});
+    p.prescribed.push_back({right, 1, 0.0});
+    auto analysis = std::make_unique<PeridynamicAnalysis>(std::move(p), std::vector<Probe>{});
+    analysis->solve();
+    return std::make_pair(std::abs(analysis->displacement()(2, centre)), analysis->timings().at("density_doublings"));
+  };
+  const auto [w_adaptive, doublings] = solve(1.0);
+  const auto [w_safe, none] = solve(2.0);
+  EXPECT_GE(doublings, 1.0);
+  EXPECT_EQ(none, 0.0);
+  EXPECT_GT(w_safe, 1.0);  // well into the post-buckled range (t = 2)
+  EXPECT_NEAR(w_adaptive / w_safe, 1.0, 1e-3);
+}
