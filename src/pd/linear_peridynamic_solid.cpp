@@ -294,6 +294,17 @@ solve::SparseMatrix LinearPeridynamicSolid::stiffness(const BondState& s, bool m
   return K;
 }
 
+solve::SparseMatrix matrix_from_parts(const std::vector<std::vector<Eigen::Triplet<Real, int>>>& parts, Index dofs) {
+  std::size_t total = 0;
+  for (const auto& p : parts) total += p.size();
+  std::vector<Eigen::Triplet<Real, int>> all;
+  all.reserve(total);
+  for (const auto& p : parts) all.insert(all.end(), p.begin(), p.end());
+  solve::SparseMatrix k(dofs, dofs);
+  k.setFromTriplets(all.begin(), all.end());
+  return k;
+}
+
 Eigen::VectorXd absolute_row_sums(const solve::SparseMatrix& upper) {
   Eigen::VectorXd sums = Eigen::VectorXd::Zero(upper.rows());
   for (Index col = 0; col < upper.outerSize(); ++col)

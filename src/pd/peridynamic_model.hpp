@@ -7,6 +7,7 @@
 // plate lattices, kirchhoff_plate.hpp).
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/types.hpp"
 #include "solve/sparse_linear_solver.hpp"
@@ -48,5 +49,9 @@ class PeridynamicModel {
 
 /// Row sums of |K| of a symmetric matrix stored as its upper triangle.
 Eigen::VectorXd absolute_row_sums(const solve::SparseMatrix& upper);
+
+/// The dofs x dofs matrix of the triplets of every part, in part order (duplicates summed in that
+/// order, so the result does not depend on which thread filled which part).
+solve::SparseMatrix matrix_from_parts(const std::vector<std::vector<Eigen::Triplet<Real, int>>>& parts, Index dofs);
 
 }  // namespace lamina::pd

@@ -45,11 +45,7 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
       poisson_[c] += poisson[i] / count;
     }
   }
-  BodyOptions fo = options;
-  fo.kinematics = Kinematics::plane_stress;
-  fo.surface_correction = SurfaceCorrection::none;
-  fo.cell_size = std::sqrt(volume_.mean() / thickness_);
-  family_ = std::make_unique<PeridynamicBody>(centre, volume_, young_, poisson_, fo);
+  family_ = column_families(centre, volume_, young_, poisson_, options, thickness_);
   const PeridynamicBody& fam = *family_;
   const Index nb = fam.bonds();
   xi_.resize(2, nb);
@@ -564,14 +560,7 @@ solve::SparseMatrix PeridynamicPlate::stiffness(const ModelState& state, bool ma
         }
     }
   }
-  std::size_t total = 0;
-  for (const auto& p : parts) total += p.size();
-  std::vector<Eigen::Triplet<Real, int>> all;
-  all.reserve(total);
-  for (auto& p : parts) all.insert(all.end(), p.begin(), p.end());
-  solve::SparseMatrix k(3 * nodes_, 3 * nodes_);
-  k.setFromTriplets(all.begin(), all.end());
-  return k;
+  return matrix_from_parts(parts, 3 * nodes_);
 }
 
 Real PeridynamicPlate::strain_energy(const ModelState& state) const {

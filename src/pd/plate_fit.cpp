@@ -2,6 +2,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <cmath>
+
 namespace lamina::pd {
 
 int plate_fit_weights(const Eigen::Matrix2Xd& xi, const Eigen::VectorXd& v, Real horizon, int max_degree,
@@ -39,6 +41,16 @@ int plate_fit_weights(const Eigen::Matrix2Xd& xi, const Eigen::VectorXd& v, Real
     return degree;
   }
   return 1;
+}
+
+std::unique_ptr<PeridynamicBody> column_families(const PointMatrix& centres, const Eigen::VectorXd& volumes,
+                                                 const Eigen::VectorXd& young, const Eigen::VectorXd& poisson,
+                                                 const BodyOptions& options, Real thickness) {
+  BodyOptions in_plane = options;
+  in_plane.kinematics = Kinematics::plane_stress;
+  in_plane.surface_correction = SurfaceCorrection::none;
+  in_plane.cell_size = std::sqrt(volumes.mean() / thickness);
+  return std::make_unique<PeridynamicBody>(centres, volumes, young, poisson, in_plane);
 }
 
 }  // namespace lamina::pd

@@ -4,7 +4,10 @@
 // reference bond xi_b, weighted by v_b; the fit's coefficients give grad f and (degree >= 2) the second
 // derivatives at the column itself (a higher-order correspondence, as in the peridynamic differential
 // operator of Madenci et al. 2016 and the peridynamic Kirchhoff-Love shell of Behzadinasab et al. 2022).
+#include <memory>
+
 #include "core/types.hpp"
+#include "pd/peridynamic_body.hpp"
 
 namespace lamina::pd {
 
@@ -14,5 +17,11 @@ namespace lamina::pd {
 /// at least 2, second (3 x count): (f_,xx, f_,yy, f_,xy) = sum_b v_b (f_j - f_i) second_b. Returns the degree.
 int plate_fit_weights(const Eigen::Matrix2Xd& xi, const Eigen::VectorXd& v, Real horizon, int max_degree,
                       Eigen::Matrix2Xd& first, Eigen::Matrix3Xd* second = nullptr);
+
+/// The in-plane families of the node columns (centres: 3 x C, z ignored): a plane-stress body over the
+/// column centres with the case's horizon and influence, cells of the columns' in-plane size.
+std::unique_ptr<PeridynamicBody> column_families(const PointMatrix& centres, const Eigen::VectorXd& volumes,
+                                                 const Eigen::VectorXd& young, const Eigen::VectorXd& poisson,
+                                                 const BodyOptions& options, Real thickness);
 
 }  // namespace lamina::pd

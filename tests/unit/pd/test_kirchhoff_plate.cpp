@@ -42,6 +42,22 @@ struct OneLayerPlate {
 
 Real bending_rigidity(Real t) { return young * t * t * t / (12 * (1 - poisson * poisson)); }
 
+/// The pd problem of a one-layer plate lattice [lo, hi] with cells of dx x dx x t (aluminium), horizon
+/// 3.015 dx, no supports or loads yet.
+PeridynamicProblem one_layer_problem(Vec3 lo, Vec3 hi, Real dx, PointCloud* cloud_out = nullptr) {
+  PeridynamicProblem p;
+  const PointCloud cloud = lattice_point_cloud(make_cell_lattice(lo, hi, Vec3(dx, dx, hi.z() - lo.z())), true);
+  const Index n = cloud.size();
+  p.positions = cloud.positions;
+  p.volumes = cloud.volumes;
+  p.young = Eigen::VectorXd::Constant(n, young);
+  p.poisson = Eigen::VectorXd::Constant(n, poisson);
+  p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
+  p.body.horizon = 3.015 * dx;
+  if (cloud_out) *cloud_out = cloud;
+  return p;
+}
+
 }  // namespace
 
 // Homogeneous membrane strain, curvature and twist give the classical energy on the whole plate: every
@@ -141,15 +157,9 @@ TEST(KirchhoffPlate, FamilyTooSmallForTheQuadraticFitIsRefused) {
 // buckled by the analysis with the default model: k = 4 within 3 % (the plate as built, with its 2.5 mm
 // overhang strips, is 2.9 % above k = 4 by a CalculiX S8R model, validation/pd_plate_one_layer).
 TEST(KirchhoffPlate, SimplySupportedSquareBucklesAtTheClassicalLoad) {
-  PeridynamicProblem p;
-  const PointCloud cloud = lattice_point_cloud(make_cell_lattice(Vec3(-2.5, -2.5, -1), Vec3(202.5, 202.5, 1), Vec3(5, 5, 2)), true);
+  PointCloud cloud;
+  PeridynamicProblem p = one_layer_problem(Vec3(-2.5, -2.5, -1), Vec3(202.5, 202.5, 1), 5, &cloud);
   const Index n = cloud.size();
-  p.positions = cloud.positions;
-  p.volumes = cloud.volumes;
-  p.young = Eigen::VectorXd::Constant(n, young);
-  p.poisson = Eigen::VectorXd::Constant(n, poisson);
-  p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
-  p.body.horizon = 3.015 * 5;
   p.analysis = PdAnalysisKind::buckling;
   Index centre = -1, right = -1;
   for (Index k = 0; k < n; ++k) {
@@ -179,15 +189,9 @@ TEST(KirchhoffPlate, SimplySupportedSquareBucklesAtTheClassicalLoad) {
 // linear static deflection of a simply supported square under a small pressure.
 TEST(KirchhoffPlate, RelaxationReachesTheLinearStaticDeflection) {
   auto problem = [](PdAnalysisKind kind) {
-    PeridynamicProblem p;
-    const PointCloud cloud = lattice_point_cloud(make_cell_lattice(Vec3(-2.5, -2.5, -1), Vec3(62.5, 62.5, 1), Vec3(5, 5, 2)), true);
+    PointCloud cloud;
+    PeridynamicProblem p = one_layer_problem(Vec3(-2.5, -2.5, -1), Vec3(62.5, 62.5, 1), 5, &cloud);
     const Index n = cloud.size();
-    p.positions = cloud.positions;
-    p.volumes = cloud.volumes;
-    p.young = Eigen::VectorXd::Constant(n, young);
-    p.poisson = Eigen::VectorXd::Constant(n, poisson);
-    p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
-    p.body.horizon = 3.015 * 5;
     p.analysis = kind;
     p.relaxation.increments = 1;
     p.relaxation.tolerance = 1e-7;
@@ -218,15 +222,9 @@ TEST(KirchhoffPlate, RelaxationReachesTheLinearStaticDeflection) {
 // reaches.
 TEST(KirchhoffPlate, DivergedRelaxationDoublesTheDensityAndReachesEquilibrium) {
   auto solve = [](Real density_factor) {
-    PeridynamicProblem p;
-    const PointCloud cloud = lattice_point_cloud(make_cell_lattice(Vec3(-5, -5, -1), Vec3(105, 105, 1), Vec3(10, 10, 2)), true);
+    PointCloud cloud;
+    PeridynamicProblem p = one_layer_problem(Vec3(-5, -5, -1), Vec3(105, 105, 1), 10, &cloud);
     const Index n = cloud.size();
-    p.positions = cloud.positions;
-    p.volumes = cloud.volumes;
-    p.young = Eigen::VectorXd::Constant(n, young);
-    p.poisson = Eigen::VectorXd::Constant(n, poisson);
-    p.density = Eigen::VectorXd::Constant(n, 2.7e-9);
-    p.body.horizon = 3.015 * 10;
     p.analysis = PdAnalysisKind::quasi_static;
     p.relaxation.increments = 4;
     p.relaxation.max_iterations = 4000;
