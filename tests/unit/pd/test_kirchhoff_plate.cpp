@@ -1,7 +1,9 @@
 // Unit tests of the one-layer plate model (pd/kirchhoff_plate.hpp): exact energy of homogeneous
 // membrane strain, curvature and twist; invariance under a large rigid rotation; forces are the energy
-// gradient and the stiffness the force derivative; only the rigid-body zero modes; a family too small
-// for the quadratic fit is refused; the simply supported square buckles at the classical load.
+// gradient and the stiffness the force derivative; only the rigid-body zero modes; the supported stiffness
+// within the ADR density bound; a family too small for the quadratic fit is refused; the simply supported
+// square buckles at the classical load; ADR reaches the linear deflection, and past buckling doubles its
+// density when a block diverges.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -139,6 +141,43 @@ TEST(KirchhoffPlate, OnlyRigidBodyZeroModes) {
     const Real largest = values.maxCoeff();
     EXPECT_LT(std::abs(values[5]), 1e-9 * largest) << factor;
     EXPECT_GT(values[6], 1e-9 * largest) << factor;
+  }
+}
+
+// The unloaded stiffness of the supported plate (w = 0 on the outer nodes, in-plane rigid motions held)
+// is positive definite and bounded by the ADR fictitious density of seed 002 eq (5): with lambda = 1/4
+// sum_j |K0_ij| the density-scaled stiffness has its eigenvalues in (0, 4].
+TEST(KirchhoffPlate, SupportedStiffnessPositiveAndBoundedByFictitiousDensity) {
+  for (Real factor : {2.5, 3.015}) {
+    OneLayerPlate f(40, 5, 2, factor);
+    const Index n = f.cloud.size();
+    const solve::SparseMatrix k0 = f.plate->stiffness(*f.plate->state_of(PointMatrix::Zero(3, n)), true, false);
+    const Eigen::MatrixXd k = Eigen::MatrixXd(Eigen::MatrixXd(k0).selfadjointView<Eigen::Upper>());
+    const Eigen::VectorXd lambda = 0.25 * absolute_row_sums(k0);
+    Index pin = -1, roller = -1;
+    for (Index i = 0; i < n; ++i) {
+      const Vec3 x = f.cloud.positions.col(i);
+      if ((x - Vec3(17.5, 17.5, 0)).norm() < 1e-9) pin = i;
+      if ((x - Vec3(37.5, 17.5, 0)).norm() < 1e-9) roller = i;
+    }
+    ASSERT_GE(pin, 0);
+    ASSERT_GE(roller, 0);
+    std::vector<Index> free;
+    for (Index d = 0; d < 3 * n; ++d) {
+      const Index i = d / 3;
+      const int a = static_cast<int>(d % 3);
+      const Vec3 x = f.cloud.positions.col(i);
+      const bool edge = x.x() < 3 || x.x() > 37 || x.y() < 3 || x.y() > 37;
+      if ((a == 2 && edge) || (i == pin && a < 2) || (i == roller && a == 1)) continue;
+      free.push_back(d);
+    }
+    Eigen::MatrixXd scaled(free.size(), free.size());
+    for (std::size_t r = 0; r < free.size(); ++r)
+      for (std::size_t c = 0; c < free.size(); ++c)
+        scaled(r, c) = k(free[r], free[c]) / std::sqrt(lambda[free[r]] * lambda[free[c]]);
+    const Eigen::VectorXd values = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled).eigenvalues();
+    EXPECT_GT(values.minCoeff(), 1e-9) << factor;
+    EXPECT_LE(values.maxCoeff(), 4.0 + 1e-9) << factor;
   }
 }
 
