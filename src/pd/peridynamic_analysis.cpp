@@ -282,6 +282,17 @@ void PeridynamicAnalysis::solve() {
 
 void PeridynamicAnalysis::run(OutputSink& sink) {
   const auto start = Clock::now();
+  if (plate_columns_ && plate_columns_->layers == 1) {
+    // one layer holds no rotation: nodes with all three translations held are simply supported
+    std::vector<int> held(static_cast<std::size_t>(body_->nodes()), 0);
+    for (const auto& p : problem_.prescribed)
+      if (!p.velocity) held[static_cast<std::size_t>(p.node)] |= 1 << p.component;
+    const auto fully = std::count(held.begin(), held.end(), 7);
+    if (fully > 1 && comm_.rank() == 0)
+      sink.notice(fmt::format("one-layer plate: {} nodes have x, y and z held - that holds no rotation (a simple "
+                              "support, not a clamp); a clamped edge needs 2-4 node layers (docs/pd.md)",
+                              fully));
+  }
   switch (problem_.analysis) {
     case PdAnalysisKind::linear_static: run_linear_static(&sink); break;
     case PdAnalysisKind::quasi_static: run_quasi_static(&sink); break;

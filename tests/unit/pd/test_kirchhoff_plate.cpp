@@ -294,3 +294,38 @@ TEST(KirchhoffPlate, DivergedRelaxationDoublesTheDensityAndReachesEquilibrium) {
   EXPECT_GT(w_safe, 1.0);  // well into the post-buckled range (t = 2)
   EXPECT_NEAR(w_adaptive / w_safe, 1.0, 1e-3);
 }
+
+namespace {
+struct NoticeRecorder : OutputSink {
+  std::vector<std::string> notices;
+  void output_point(Index, Real, Real) override {}
+  void progress(Real, const std::string&) override {}
+  void notice(const std::string& text) override { notices.push_back(text); }
+};
+}  // namespace
+
+// One layer holds no rotation: a line of nodes with x, y and z held is a simple support, and the run says
+// so (a user who clamps a 2-layer plate that way would otherwise expect a clamp).
+TEST(KirchhoffPlate, HeldTranslationsAreNamedASimpleSupport) {
+  for (bool all_three : {true, false}) {
+    PointCloud cloud;
+    PeridynamicProblem p = one_layer_problem(Vec3(-2.5, -2.5, -1), Vec3(62.5, 62.5, 1), 5, &cloud);
+    p.analysis = PdAnalysisKind::linear_static;
+    for (Index k = 0; k < cloud.size(); ++k) {
+      const Vec3 x = cloud.positions.col(k);
+      if (x.x() < 1 || x.x() > 59 || x.y() < 1 || x.y() > 59) {
+        for (int a = all_three ? 0 : 2; a < 3; ++a) p.prescribed.push_back({k, a, 0.0});
+        if (!all_three && x.x() < 1 && x.y() < 1) p.prescribed.push_back({k, 0, 0.0}), p.prescribed.push_back({k, 1, 0.0});
+        if (!all_three && x.x() > 59 && x.y() < 1) p.prescribed.push_back({k, 1, 0.0});
+      } else {
+        p.forces.push_back({k, Vec3(0, 0, -1e-3)});
+      }
+    }
+    PeridynamicAnalysis analysis(std::move(p), {});
+    NoticeRecorder sink;
+    analysis.run(sink);
+    const bool named = !sink.notices.empty() && sink.notices.front().find("simple support") != std::string::npos;
+    EXPECT_EQ(named, all_three);
+  }
+}
+
