@@ -163,17 +163,16 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
     BodyOptions probe_options = options;
     probe_options.surface_correction = SurfaceCorrection::none;
     body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, probe_options);
-    if (columns->layers == 1) {
-      auto plate = std::make_unique<KirchhoffPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
-                                                    problem_.young, problem_.poisson, options);
+    auto adopt = [&](auto plate) {  // one layer: the Kirchhoff model; 2-4 layers: the director model
       plate_columns_ = &plate->columns();
       model_ = std::move(plate);
-    } else {
-      auto plate = std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions,
-                                                      problem_.volumes, problem_.young, problem_.poisson, options);
-      plate_columns_ = &plate->columns();
-      model_ = std::move(plate);
-    }
+    };
+    if (columns->layers == 1)
+      adopt(std::make_unique<KirchhoffPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+                                             problem_.young, problem_.poisson, options));
+    else
+      adopt(std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+                                               problem_.young, problem_.poisson, options));
   } else {
     BodyOptions body_options = options;
     body_options.lean_bonds = lean_bond_storage();
@@ -352,9 +351,10 @@ void PeridynamicAnalysis::check_unloaded_stiffness(const solve::SparseMatrix& k0
       fmt::format("a zero-energy mode of the {} model (smallest density-scaled stiffness eigenvalue {:.2g}, largest at the node at "
                   "({:.4g}, {:.4g}, {:.4g})): {}",
                   model_->name(), r.smallest, x.x(), x.y(), x.z(),
-                  model_->name() == "plate"
-                      ? "give the horizon at least 1.4 in-plane spacings"
-                      : "use a horizon above the cell diagonal, or the plate models for a 1-4 layer plate (pd.plate_model: auto)"));
+                  model_->name() == "plate"             ? "give the horizon at least 1.4 in-plane spacings"
+                  : model_->name() == "kirchhoff_plate" ? "give the horizon about 3 in-plane spacings"
+                                                        : "use a horizon above the cell diagonal, or the plate models for a "
+                                                          "1-4 layer plate (pd.plate_model: auto)"));
 }
 
 void PeridynamicAnalysis::run_linear_static(OutputSink* sink) {
