@@ -180,6 +180,28 @@ Real KirchhoffPlate::node_energy(Index i, const Vec3* slot, Vec3* bond_gradient,
     grad_h[2] -= (rho * xi[0] * xi[1]) * n;
     bond_gradient[t] = g;
   }
+  // held rotations: the penalty on the change of the tangents (the slopes, and the in-plane spin)
+  if (!held_axes_.empty() && held_axes_[static_cast<std::size_t>(i)]) {
+    const std::uint8_t axes = held_axes_[static_cast<std::size_t>(i)];
+    const Mat3& f0 = held_tangents0_[static_cast<std::size_t>(i)];
+    const Vec3 d1 = f.col(0) - f0.col(0), d2 = f.col(1) - f0.col(1);
+    const Real k_held = kRotationPenalty * bending_factor_ * plane_stress_[static_cast<std::size_t>(i)](0, 0) /
+                        (columns_.spacing * columns_.spacing);
+    if (axes & 1u) {  // rx: the tangent along y stays in the plane
+      w += 0.5 * k_held * d2.z() * d2.z();
+      grad_f.col(1).z() += k_held * d2.z();
+    }
+    if (axes & 2u) {  // ry: the tangent along x
+      w += 0.5 * k_held * d1.z() * d1.z();
+      grad_f.col(0).z() += k_held * d1.z();
+    }
+    if (axes & 4u) {  // rz: the in-plane spin
+      const Real spin = 0.5 * (d1.y() - d2.x());
+      w += 0.5 * k_held * spin * spin;
+      grad_f.col(0).y() += 0.5 * k_held * spin;
+      grad_f.col(1).x() -= 0.5 * k_held * spin;
+    }
+  }
   // n = F_1 x F_2 / |F_1 x F_2|: dn = (I - n n^T) (dF_1 x F_2 + F_1 x dF_2) / |F_1 x F_2|
   const Vec3 perpendicular = (grad_n - n.dot(grad_n) * n) / k.area;
   grad_f.col(0) += f.col(1).cross(perpendicular);
@@ -192,6 +214,47 @@ Real KirchhoffPlate::node_energy(Index i, const Vec3* slot, Vec3* bond_gradient,
   }
   if (measures) *measures = {sigma, e, kappa};
   return v * w;
+}
+
+void KirchhoffPlate::hold_rotations(const HeldRotations& held, const std::vector<char>& prescribed) {
+  const PlateColumns& pc = columns_;
+  const PeridynamicBody& fam = *family_;
+  const Index nc = pc.columns();
+  held_axes_.assign(static_cast<std::size_t>(nc), 0);
+  held_tangents0_.assign(static_cast<std::size_t>(nc), Mat3::Zero());
+  auto is_prescribed = [&](Index column, int a) {
+    return prescribed[static_cast<std::size_t>(3 * pc.node[pc.first[column]] + a)] != 0;
+  };
+  std::vector<Vec3> dm;
+  for (std::size_t e = 0; e < held.nodes.size(); ++e) {
+    const Index node = held.nodes[e];
+    const Index c = node >= 0 && node < static_cast<Index>(pc.column_of.size()) ? pc.column_of[node] : -1;
+    if (c < 0) continue;
+    const Index b0 = fam.first_bond(c), count = fam.end_bond(c) - b0;
+    // the lattice neighbours one spacing away along x and along y: are their w (and x, y) prescribed?
+    bool w_fixed_along[2] = {true, true}, spin_fixed = true;
+    int found[2] = {0, 0};
+    for (Index t = 0; t < count; ++t) {
+      const Index b = b0 + t, j = fam.neighbour(b);
+      for (int a = 0; a < 2; ++a) {
+        const Real along = std::abs(xi_(a, b)), across = std::abs(xi_(1 - a, b));
+        if (std::abs(along - pc.spacing) > 1e-6 * pc.spacing || across > 1e-6 * pc.spacing) continue;
+        ++found[a];
+        w_fixed_along[a] = w_fixed_along[a] && is_prescribed(j, 2);
+        spin_fixed = spin_fixed && is_prescribed(j, 1 - a);  // along x: v, along y: u
+      }
+    }
+    std::uint8_t axes = held.axes[e];
+    if (found[1] > 0 && w_fixed_along[1]) axes &= static_cast<std::uint8_t>(~1u);  // rx: the slope along y
+    if (found[0] > 0 && w_fixed_along[0]) axes &= static_cast<std::uint8_t>(~2u);  // ry: the slope along x
+    if (found[0] > 0 && found[1] > 0 && spin_fixed) axes &= static_cast<std::uint8_t>(~4u);
+    held_axes_[static_cast<std::size_t>(c)] |= axes;
+    const Vec3 mc = reference_.col(pc.node[pc.first[c]]);
+    dm.resize(static_cast<std::size_t>(count));
+    for (Index t = 0; t < count; ++t) dm[static_cast<std::size_t>(t)] = reference_.col(pc.node[pc.first[fam.neighbour(b0 + t)]]) - mc;
+    const FitKinematics k = fit_kinematics(dm.data(), count, first_, second_, b0);
+    held_tangents0_[static_cast<std::size_t>(c)].leftCols<2>() = k.f;
+  }
 }
 
 void KirchhoffPlate::update(const PointMatrix& u, ModelState& state, bool /*linearised*/) const {

@@ -1,5 +1,6 @@
 #include "pd/nodal_conditions.hpp"
 
+#include <cstdint>
 #include <map>
 #include <optional>
 
@@ -18,6 +19,7 @@ void apply_conditions(const std::vector<model::Constraint>& constraints, const s
   };
   // Boundary conditions (a later condition on the same dof replaces an earlier one).
   std::map<Index, std::size_t> seen;
+  std::map<Index, std::uint8_t> held_axes;  // rotations held, per node
   auto prescribe = [&](const PrescribedDof& d) {
     const Index key = 3 * d.node + d.component;
     auto it = seen.find(key);
@@ -31,7 +33,6 @@ void apply_conditions(const std::vector<model::Constraint>& constraints, const s
   for (const auto& b : constraints) {
     const int ramp = ramp_index(b.ramp);
     int step_ramp = -1;  // velocities default to a step (constant): one ramp for the whole condition
-    bool any = false;
     for (int a = 0; a < 3; ++a) {
       const auto A = static_cast<std::size_t>(a);
       if (b.velocity[A] && p.analysis != PdAnalysisKind::explicit_dynamics) {
@@ -40,7 +41,6 @@ void apply_conditions(const std::vector<model::Constraint>& constraints, const s
         continue;
       }
       if (!b.fixed[A] && !b.displacement[A] && !b.velocity[A]) continue;
-      any = true;
       // the prescribed value's field, parsed once for all the nodes
       std::optional<geometry::FieldEvaluator> value;
       try {
@@ -69,9 +69,22 @@ void apply_conditions(const std::vector<model::Constraint>& constraints, const s
         prescribe(d);
       }
     }
-    if (!any && (b.fixed[3] || b.fixed[4] || b.fixed[5]))
-      problems.push_back(model::diagnostic_at(b.location, ".fix", "translations x, y or z (peridynamic nodes have no rotations)",
-                                              "only rotations"));
+    // rotations: kept for the one-layer plate model (the analysis refuses them on any other body)
+    std::uint8_t axes = 0;
+    for (int a = 0; a < 3; ++a)
+      if (b.fixed[static_cast<std::size_t>(3 + a)]) axes |= static_cast<std::uint8_t>(1 << a);
+    if (axes) {
+      if (!p.held_rotations.where)
+        p.held_rotations.where = model::diagnostic_at(
+            b.location, ".fix", "translations x, y or z: peridynamic nodes have no rotations (they are held only on a "
+            "one-layer plate, through its normal; a 2-4 layer plate is clamped by holding x, y, z of every layer)",
+            "rotations");
+      for (Index i : b.select.nodes) held_axes[i] |= axes;
+    }
+  }
+  for (const auto& [node, axes] : held_axes) {
+    p.held_rotations.nodes.push_back(node);
+    p.held_rotations.axes.push_back(axes);
   }
   // Loads.
   for (const auto& l : loads) {

@@ -167,13 +167,20 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
       plate_columns_ = &plate->columns();
       model_ = std::move(plate);
     };
-    if (columns->layers == 1)
-      adopt(std::make_unique<KirchhoffPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
-                                             problem_.young, problem_.poisson, options));
-    else
-      adopt(std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+    if (columns->layers == 1) {
+      auto plate = std::make_unique<KirchhoffPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
+                                                    problem_.young, problem_.poisson, options);
+      std::vector<char> prescribed(static_cast<std::size_t>(3 * problem_.positions.cols()), 0);
+      for (const auto& d : problem_.prescribed) prescribed[static_cast<std::size_t>(3 * d.node + d.component)] = 1;
+      plate->hold_rotations(problem_.held_rotations, prescribed);
+      adopt(std::move(plate));
+      return;
+    }
+    if (!problem_.held_rotations.empty()) throw InputError(*problem_.held_rotations.where);
+    adopt(std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
                                                problem_.young, problem_.poisson, options));
   } else {
+    if (!problem_.held_rotations.empty()) throw InputError(*problem_.held_rotations.where);
     BodyOptions body_options = options;
     body_options.lean_bonds = lean_bond_storage();
     body_ = std::make_unique<PeridynamicBody>(positions, problem_.volumes, problem_.young, problem_.poisson, body_options);
@@ -286,10 +293,11 @@ void PeridynamicAnalysis::run(OutputSink& sink) {
     std::vector<int> held(static_cast<std::size_t>(body_->nodes()), 0);
     for (const auto& p : problem_.prescribed)
       if (!p.velocity) held[static_cast<std::size_t>(p.node)] |= 1 << p.component;
+    for (Index node : problem_.held_rotations.nodes) held[static_cast<std::size_t>(node)] |= 8;
     const auto fully = std::count(held.begin(), held.end(), 7);
     if (fully > 1 && comm_.rank() == 0)
-      sink.notice(fmt::format("one-layer plate: {} nodes have x, y and z held - that holds no rotation (a simple "
-                              "support, not a clamp); a clamped edge needs 2-4 node layers (docs/pd.md)",
+      sink.notice(fmt::format("one-layer plate: {} nodes have x, y and z held and no rotation - a simple support, "
+                              "not a clamp; to clamp them hold their rotations too (fix: [x, y, z, rx, ry], docs/pd.md)",
                               fully));
   }
   switch (problem_.analysis) {

@@ -2,9 +2,12 @@
 // PeridynamicProblem: everything a `method: pd` analysis needs, translated from the case by the
 // application (this module knows no files and no YAML): nodes, materials, body options,
 // prescribed degrees of freedom, nodal loads, the analysis kind and its solver parameters.
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "core/linear_solver_choice.hpp"
 #include "core/prescribed_dof.hpp"
 #include "core/ramp.hpp"
@@ -17,6 +20,15 @@ struct NodalForce {
   Index node = 0;
   Vec3 force = Vec3::Zero();
   int ramp = -1;
+};
+
+/// Rotations held at nodes (`fix: [rx, ry, rz]`). Peridynamic nodes have no rotations: only the
+/// one-layer plate model holds them, on the slopes of its fitted surface (docs/pd.md, "One node layer").
+struct HeldRotations {
+  std::vector<Index> nodes;          // nodes with at least one rotation held
+  std::vector<std::uint8_t> axes;    // per entry: bit a set = rotation about global axis a (x, y, z) held
+  std::optional<Diagnostic> where;   // the first `fix` that holds one (for the refusal on other bodies)
+  bool empty() const { return nodes.empty(); }
 };
 
 enum class PdAnalysisKind { linear_static, quasi_static, explicit_dynamics, buckling };
@@ -73,6 +85,7 @@ struct PeridynamicProblem {
   Eigen::VectorXd volumes, young, poisson, density;
   BodyOptions body;
   std::vector<PrescribedDof> prescribed;
+  HeldRotations held_rotations;
   std::vector<NodalForce> forces;
   PointMatrix initial_velocity;     // empty or 3 x N
   std::vector<Ramp> ramps;  // non-linear ramps referred to by index (progress: the load factor or t / end)
