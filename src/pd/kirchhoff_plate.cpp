@@ -257,6 +257,25 @@ void KirchhoffPlate::hold_rotations(const HeldRotations& held, const std::vector
   }
 }
 
+Real KirchhoffPlate::transverse_wavenumber(const PointMatrix& field) const {
+  const PlateColumns& pc = columns_;
+  const PeridynamicBody& fam = *family_;
+  Real curvature = 0, slope = 0;
+  for (Index i = 0; i < pc.columns(); ++i) {
+    const Real wi = field(2, pc.node[pc.first[i]]);
+    Eigen::Vector2d g = Eigen::Vector2d::Zero();
+    Vec3 h = Vec3::Zero();
+    for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b) {
+      const Real dw = field(2, pc.node[pc.first[fam.neighbour(b)]]) - wi;
+      g += dw * first_.col(b);
+      h += dw * second_.col(b);
+    }
+    curvature += volume_[i] * (h[0] * h[0] + h[1] * h[1] + 2 * h[2] * h[2]);
+    slope += volume_[i] * g.squaredNorm();
+  }
+  return slope > 0 ? std::sqrt(curvature / slope) : 0.0;
+}
+
 void KirchhoffPlate::update(const PointMatrix& u, ModelState& state, bool /*linearised*/) const {
   auto& s = static_cast<KirchhoffPlateState&>(state);
   const PlateColumns& pc = columns_;

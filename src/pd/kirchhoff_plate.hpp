@@ -67,6 +67,11 @@ class KirchhoffPlate : public PeridynamicModel {
   /// The held-rotation penalty relative to the node's bending stiffness (see the header).
   static constexpr Real kRotationPenalty = 1e3;
 
+  /// Transverse wavenumber k of a field (3 x nodes; its z components w): k^2 = sum V |grad grad w|^2 /
+  /// sum V |grad w|^2 with the fit's derivatives (a^2 + b^2 for w = sin(a x) sin(b y)). The curvature is a
+  /// second derivative of a cubic fit, so k * horizon above about 1 means the model is soft for the field.
+  Real transverse_wavenumber(const PointMatrix& field) const;
+
   const PlateColumns& columns() const { return columns_; }
   Real thickness() const { return thickness_; }
   /// Lowest polynomial degree of the fits (2 or 3).

@@ -43,6 +43,9 @@ class PeridynamicAnalysis : public Analysis {
   PeridynamicAnalysis(PeridynamicProblem problem, std::vector<Probe> probes,
                       const parallel::Communicator& comm = parallel::Communicator::world());
 
+  /// One-layer plates: a buckling mode with wavenumber x horizon above this is named as too short.
+  static constexpr Real kShortModeResolution = 0.9;
+
   std::string method() const override { return "pd"; }
   void run(OutputSink& sink) override;
   Real probe(const Probe& probe) const override;

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.hpp"
 #include "geometry/cell_lattice.hpp"
@@ -429,5 +430,53 @@ TEST(KirchhoffPlate, HeldRotationsOnATwoLayerPlateAreRefused) {
     ASSERT_EQ(e.diagnostics().size(), 1u);
     EXPECT_EQ(e.diagnostics().front().key_path, "boundary.0.fix");
     EXPECT_EQ(e.diagnostics().front().line, 12);
+  }
+}
+
+// The transverse wavenumber of a field, read with the fit's derivatives, is sqrt(a^2 + b^2) for
+// w = sin(a x) sin(b y): within 1 % for the long field, read low for a short one (the fit's own error).
+TEST(KirchhoffPlate, TransverseWavenumberOfASineField) {
+  OneLayerPlate plate(200, 5, 2, 3.015);
+  const Index n = plate.cloud.size();
+  for (int m : {1, 3}) {
+    const Real a = m * M_PI / 200, b = M_PI / 200;
+    PointMatrix w = PointMatrix::Zero(3, n);
+    for (Index k = 0; k < n; ++k) w(2, k) = std::sin(a * plate.cloud.positions(0, k)) * std::sin(b * plate.cloud.positions(1, k));
+    const Real ratio = plate.plate->transverse_wavenumber(w) / std::hypot(a, b);
+    std::printf("wavenumber / exact, m = %d: %.4f\n", m, ratio);
+    // the fit's second derivatives read short fields low, by order (k delta)^2 (k delta = 0.33 / 0.75 here)
+    EXPECT_NEAR(ratio, 1.0, m == 1 ? 0.01 : 0.04) << m;
+    EXPECT_LE(ratio, 1.0 + 1e-3);
+  }
+}
+
+// A buckling mode too short for the one-layer model's fit is named in a NOTE (the square with clamped
+// unloaded edges on 10 mm cells: wavenumber x horizon 1.05, 7.8 % soft); the simply supported square on
+// the same lattice (0.65) is not.
+TEST(KirchhoffPlate, ShortBucklingModeIsNamed) {
+  for (bool clamped : {false, true}) {
+    PointCloud cloud;
+    PeridynamicProblem p = one_layer_problem(Vec3(-5, -5, -1), Vec3(205, 205, 1), 10, &cloud);
+    p.analysis = PdAnalysisKind::buckling;
+    p.buckling.modes = 1;
+    p.poisson = Eigen::VectorXd::Zero(cloud.size());
+    for (Index k = 0; k < cloud.size(); ++k) {
+      const Vec3 x = cloud.positions.col(k);
+      const bool x_edge = x.x() < 1 || x.x() > 199, y_edge = x.y() < 1 || x.y() > 199;
+      if (x_edge || y_edge) p.prescribed.push_back({k, 2, 0.0});
+      if (clamped && y_edge) {
+        p.held_rotations.nodes.push_back(k);
+        p.held_rotations.axes.push_back(1);  // rx: the slope across the edge
+      }
+      if (x.x() > 199) p.forces.push_back({k, Vec3(-1.0, 0, 0)});
+      if (x.x() < 1) p.forces.push_back({k, Vec3(1.0, 0, 0)});
+      if ((x - Vec3(100, 100, 0)).norm() < 1e-9) p.prescribed.push_back({k, 0, 0.0}), p.prescribed.push_back({k, 1, 0.0});
+      if ((x - Vec3(200, 100, 0)).norm() < 1e-9) p.prescribed.push_back({k, 1, 0.0});
+    }
+    PeridynamicAnalysis analysis(std::move(p), {});
+    NoticeRecorder sink;
+    analysis.run(sink);
+    const bool named = !sink.notices.empty() && sink.notices.back().find("short for the horizon") != std::string::npos;
+    EXPECT_EQ(named, clamped);
   }
 }
