@@ -92,7 +92,10 @@ history_cases += [(os.path.join(source, "validation/mpm_cantilever_shear/case.ya
                   # the one-layer plate (Kirchhoff plate model: forces computed whole on every rank)
                   (os.path.join(source, "validation/pd_plate_one_layer_bending/case.yaml"),
                    {"adr": ["--set", "pd.analysis=quasi_static", "--set", "pd.quasi_static={increments: 1, tolerance: 1e-7}",
-                            "--set", "output.vtu=false"]})]
+                            "--set", "output.vtu=false"],
+                    # clamped: held rotations (a penalty on the fitted slopes)
+                    "adr_clamped": ["--set", "pd.analysis=quasi_static", "--set", "boundary.0.fix=[x,y,z,rx,ry]",
+                                    "--set", "pd.quasi_static={increments: 1, tolerance: 1e-7}", "--set", "output.vtu=false"]})]
 for case, variants in history_cases:
     name = os.path.basename(case) if os.path.dirname(case) == case_dir else case.split("/")[-2]
     for variant, extra in variants.items():
