@@ -69,7 +69,7 @@ class KirchhoffPlate : public PeridynamicModel {
 
   /// Transverse wavenumber k of a field (3 x nodes; its z components w): k^2 = sum V |grad grad w|^2 /
   /// sum V |grad w|^2 with the fit's derivatives (a^2 + b^2 for w = sin(a x) sin(b y)). The curvature is a
-  /// second derivative of a cubic fit, so k * horizon above about 1 means the model is soft for the field.
+  /// second derivative of a cubic fit, so k * horizon above about 0.9 means the model is soft for the field.
   Real transverse_wavenumber(const PointMatrix& field) const;
 
   const PlateColumns& columns() const { return columns_; }

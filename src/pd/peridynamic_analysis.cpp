@@ -178,7 +178,7 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
     }
     if (!problem_.held_rotations.empty()) throw InputError(*problem_.held_rotations.where);
     adopt(std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
-                                               problem_.young, problem_.poisson, options));
+                                             problem_.young, problem_.poisson, options));
   } else {
     if (!problem_.held_rotations.empty()) throw InputError(*problem_.held_rotations.where);
     BodyOptions body_options = options;
