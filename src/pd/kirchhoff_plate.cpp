@@ -180,7 +180,7 @@ Real KirchhoffPlate::node_energy(Index i, const Vec3* slot, Vec3* bond_gradient,
     grad_h[2] -= (rho * xi[0] * xi[1]) * n;
     bond_gradient[t] = g;
   }
-  // held rotations: the penalty on the change of the tangents (the slopes, and the in-plane spin)
+  // held rotations: the penalty on the change of the tangents out of the plane (the slopes)
   if (!held_axes_.empty() && held_axes_[static_cast<std::size_t>(i)]) {
     const std::uint8_t axes = held_axes_[static_cast<std::size_t>(i)];
     const Mat3& f0 = held_tangents0_[static_cast<std::size_t>(i)];
@@ -194,12 +194,6 @@ Real KirchhoffPlate::node_energy(Index i, const Vec3* slot, Vec3* bond_gradient,
     if (axes & 2u) {  // ry: the tangent along x
       w += 0.5 * k_held * d1.z() * d1.z();
       grad_f.col(0).z() += k_held * d1.z();
-    }
-    if (axes & 4u) {  // rz: the in-plane spin
-      const Real spin = 0.5 * (d1.y() - d2.x());
-      w += 0.5 * k_held * spin * spin;
-      grad_f.col(0).y() += 0.5 * k_held * spin;
-      grad_f.col(1).x() -= 0.5 * k_held * spin;
     }
   }
   // n = F_1 x F_2 / |F_1 x F_2|: dn = (I - n n^T) (dF_1 x F_2 + F_1 x dF_2) / |F_1 x F_2|
@@ -231,8 +225,8 @@ void KirchhoffPlate::hold_rotations(const HeldRotations& held, const std::vector
     const Index c = node >= 0 && node < static_cast<Index>(pc.column_of.size()) ? pc.column_of[node] : -1;
     if (c < 0) continue;
     const Index b0 = fam.first_bond(c), count = fam.end_bond(c) - b0;
-    // the lattice neighbours one spacing away along x and along y: are their w (and x, y) prescribed?
-    bool w_fixed_along[2] = {true, true}, spin_fixed = true;
+    // the lattice neighbours one spacing away along x and along y: are their w prescribed?
+    bool w_fixed_along[2] = {true, true};
     int found[2] = {0, 0};
     for (Index t = 0; t < count; ++t) {
       const Index b = b0 + t, j = fam.neighbour(b);
@@ -241,13 +235,11 @@ void KirchhoffPlate::hold_rotations(const HeldRotations& held, const std::vector
         if (std::abs(along - pc.spacing) > 1e-6 * pc.spacing || across > 1e-6 * pc.spacing) continue;
         ++found[a];
         w_fixed_along[a] = w_fixed_along[a] && is_prescribed(j, 2);
-        spin_fixed = spin_fixed && is_prescribed(j, 1 - a);  // along x: v, along y: u
       }
     }
-    std::uint8_t axes = held.axes[e];
+    std::uint8_t axes = held.axes[e] & 3u;  // rz: no drilling rotation (the in-plane rotation follows x, y)
     if (found[1] > 0 && w_fixed_along[1]) axes &= static_cast<std::uint8_t>(~1u);  // rx: the slope along y
     if (found[0] > 0 && w_fixed_along[0]) axes &= static_cast<std::uint8_t>(~2u);  // ry: the slope along x
-    if (found[0] > 0 && found[1] > 0 && spin_fixed) axes &= static_cast<std::uint8_t>(~4u);
     held_axes_[static_cast<std::size_t>(c)] |= axes;
     const Vec3 mc = reference_.col(pc.node[pc.first[c]]);
     dm.resize(static_cast<std::size_t>(count));

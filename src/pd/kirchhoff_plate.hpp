@@ -13,10 +13,11 @@
 // small for a quadratic fit is refused); k_b, g_b: the stabilisation moduli of the director model
 // (peridynamic_plate.hpp) on the non-polynomial remainder only, so a field the fit reproduces has exactly
 // the classical energy. Every measure is invariant under rigid rotation. No transverse shear (Kirchhoff).
-// Held rotations (`fix: [rx, ry, rz]`, a clamp): a penalty on the change of the fitted tangents at the
-// node, 1/2 k_h V_i sum q^2 with q = e_z . dF_2 (rx), e_z . dF_1 (ry), (e_y . dF_1 - e_x . dF_2) / 2 (rz),
-// k_h = 1e3 E t^2 / (12 (1 - nu^2) s^2) (s the in-plane spacing: 1e3 x the node's bending stiffness);
-// only the components the supports of the neighbours do not already fix (hold_rotations).
+// Held rotations (`fix: [rx, ry]`, a clamp): a penalty on the change of the fitted tangents at the node,
+// 1/2 k_h V_i sum q^2 with q = e_z . dF_2 (rx), e_z . dF_1 (ry), k_h = 1e3 E t^2 / (12 (1 - nu^2) s^2) (s the
+// in-plane spacing: 1e3 x the node's bending stiffness); only the slopes the supports of the neighbours do
+// not already fix (hold_rotations). rz has no effect: there is no drilling rotation (the in-plane rotation
+// follows x and y; holding it would also hold the in-plane shear at a clamped edge).
 // Behzadinasab, Alaydin, Trask, Bazilevs (2022), a rotation-free Kirchhoff-Love shell for peridynamics;
 // Silling (2017) for the bond-level stabilisation.
 #include <cstdint>
@@ -61,8 +62,8 @@ class KirchhoffPlate : public PeridynamicModel {
   /// Holds the rotations of `held` at its nodes (those of this plate; a node of no column is ignored).
   /// prescribed (3 per node, x y z): the translations the case prescribes. A slope that the prescribed w
   /// of the node's lattice neighbours along it already fixes (the slope along a supported edge, both
-  /// slopes at a corner) and an in-plane spin their prescribed x, y fix are not penalised: in the discrete
-  /// fit that would constrain the non-polynomial part of w as well (over-constraint, stiff at coarse lattices).
+  /// slopes at a corner) is not penalised: in the discrete fit that would constrain the non-polynomial
+  /// part of w as well (over-constraint, stiff at coarse lattices). rz is ignored (see the header).
   void hold_rotations(const HeldRotations& held, const std::vector<char>& prescribed);
   /// The held-rotation penalty relative to the node's bending stiffness (see the header).
   static constexpr Real kRotationPenalty = 1e3;
@@ -98,7 +99,7 @@ class KirchhoffPlate : public PeridynamicModel {
   // per bond
   Eigen::Matrix2Xd xi_, first_;   // reference bond; v_b B_b
   Eigen::Matrix3Xd second_;       // v_b C_b (xx, yy, xy)
-  std::vector<std::uint8_t> held_axes_;  // per column: bit a = rotation about axis a held
+  std::vector<std::uint8_t> held_axes_;  // per column: bit a = rotation about axis a held (x, y)
   std::vector<Mat3> held_tangents0_;      // per column with held axes: reference F_1, F_2 (columns 0, 1)
   Eigen::VectorXd membrane_stabilizer_, transverse_stabilizer_, inverse_length_, r0_;
   PointMatrix z0_;

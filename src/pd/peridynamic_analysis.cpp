@@ -293,7 +293,14 @@ void PeridynamicAnalysis::run(OutputSink& sink) {
     std::vector<int> held(static_cast<std::size_t>(body_->nodes()), 0);
     for (const auto& p : problem_.prescribed)
       if (!p.velocity) held[static_cast<std::size_t>(p.node)] |= 1 << p.component;
-    for (Index node : problem_.held_rotations.nodes) held[static_cast<std::size_t>(node)] |= 8;
+    bool drilling = false;
+    for (std::size_t e = 0; e < problem_.held_rotations.nodes.size(); ++e) {
+      held[static_cast<std::size_t>(problem_.held_rotations.nodes[e])] |= 8;
+      drilling = drilling || (problem_.held_rotations.axes[e] & 4u);
+    }
+    if (drilling && comm_.rank() == 0)
+      sink.notice("one-layer plate: rz has no effect - the plate has no drilling rotation (its in-plane rotation "
+                  "follows the held x, y; rx and ry hold the slopes, docs/pd.md)");
     const auto fully = std::count(held.begin(), held.end(), 7);
     if (fully > 1 && comm_.rank() == 0)
       sink.notice(fmt::format("one-layer plate: {} nodes have x, y and z held and no rotation - a simple support, "

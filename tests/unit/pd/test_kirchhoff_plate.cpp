@@ -480,3 +480,22 @@ TEST(KirchhoffPlate, ShortBucklingModeIsNamed) {
     EXPECT_EQ(named, clamped);
   }
 }
+
+// rz has no effect on a one-layer plate (no drilling rotation): an in-plane shear field stores the same
+// energy with rz held at the first node column as without (holding the fitted spin would hold the shear).
+TEST(KirchhoffPlate, HeldDrillingRotationHasNoEffect) {
+  OneLayerPlate plate(60, 5, 1, 3.015);
+  const Index n = plate.cloud.size();
+  PointMatrix u = PointMatrix::Zero(3, n);
+  for (Index k = 0; k < n; ++k) u(1, k) = 1e-4 * plate.cloud.positions(0, k);  // v = gamma x
+  const Real free_energy = plate.energy(u);
+  HeldRotations held;
+  for (Index k = 0; k < n; ++k)
+    if (plate.cloud.positions(0, k) < 3) {
+      held.nodes.push_back(k);
+      held.axes.push_back(4);  // rz
+    }
+  plate.plate->hold_rotations(held, std::vector<char>(static_cast<std::size_t>(3 * n), 0));
+  EXPECT_GT(free_energy, 0);
+  EXPECT_EQ(plate.energy(u), free_energy);
+}
