@@ -183,7 +183,7 @@ Real KirchhoffPlate::node_energy(Index i, const Vec3* slot, Vec3* bond_gradient,
   // held rotations: the penalty on the change of the tangents out of the plane (the slopes)
   if (!held_axes_.empty() && held_axes_[static_cast<std::size_t>(i)]) {
     const std::uint8_t axes = held_axes_[static_cast<std::size_t>(i)];
-    const Mat3& f0 = held_tangents0_[static_cast<std::size_t>(i)];
+    const Mat32& f0 = held_tangents0_[static_cast<std::size_t>(i)];
     const Vec3 d1 = f.col(0) - f0.col(0), d2 = f.col(1) - f0.col(1);
     const Real k_held = kRotationPenalty * bending_factor_ * plane_stress_[static_cast<std::size_t>(i)](0, 0) /
                         (columns_.spacing * columns_.spacing);
@@ -215,7 +215,7 @@ void KirchhoffPlate::hold_rotations(const HeldRotations& held, const std::vector
   const PeridynamicBody& fam = *family_;
   const Index nc = pc.columns();
   held_axes_.assign(static_cast<std::size_t>(nc), 0);
-  held_tangents0_.assign(static_cast<std::size_t>(nc), Mat3::Zero());
+  held_tangents0_.assign(static_cast<std::size_t>(nc), Mat32::Zero());
   auto is_prescribed = [&](Index column, int a) {
     return prescribed[static_cast<std::size_t>(3 * pc.node[pc.first[column]] + a)] != 0;
   };
@@ -245,7 +245,7 @@ void KirchhoffPlate::hold_rotations(const HeldRotations& held, const std::vector
     dm.resize(static_cast<std::size_t>(count));
     for (Index t = 0; t < count; ++t) dm[static_cast<std::size_t>(t)] = reference_.col(pc.node[pc.first[fam.neighbour(b0 + t)]]) - mc;
     const FitKinematics k = fit_kinematics(dm.data(), count, first_, second_, b0);
-    held_tangents0_[static_cast<std::size_t>(c)].leftCols<2>() = k.f;
+    held_tangents0_[static_cast<std::size_t>(c)] = k.f;
   }
 }
 

@@ -100,7 +100,7 @@ class KirchhoffPlate : public PeridynamicModel {
   Eigen::Matrix2Xd xi_, first_;   // reference bond; v_b B_b
   Eigen::Matrix3Xd second_;       // v_b C_b (xx, yy, xy)
   std::vector<std::uint8_t> held_axes_;  // per column: bit a = rotation about axis a held (x, y)
-  std::vector<Mat3> held_tangents0_;      // per column with held axes: reference F_1, F_2 (columns 0, 1)
+  std::vector<Eigen::Matrix<Real, 3, 2>> held_tangents0_;  // per column with held axes: reference F_1, F_2
   Eigen::VectorXd membrane_stabilizer_, transverse_stabilizer_, inverse_length_, r0_;
   PointMatrix z0_;
 };
