@@ -26,10 +26,10 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
 
   io::NodeReader support = section.child("support");
   if (support.defined() && support.expect_map()) {
-    // {shape: box|sphere, kappa: k} | {shape: box, kappa: [kx, ky, kz]} | {nearest: N} | {radius: [rx, ry, rz]} | {mode: all|variable, nearest: N, scale: s}
-    const bool has_nearest = support.has("nearest"), has_radius = support.has("radius"), has_kappa = support.has("kappa");
+    // {shape: box|sphere, kappa: k} | {shape: box, kappa: [kx, ky, kz]} | {nearest: N, shape, kappa} | {radius: [rx, ry, rz]} | {mode: all|variable, nearest: N, scale: s}
+    const bool has_nearest = support.has("nearest"), has_radius = support.has("radius");
     const std::string mode = support.word("mode", {"kappa", "fixed_radius", "nearest", "all", "variable"},
-                                          has_radius ? "fixed_radius" : (has_nearest && !has_kappa) ? "nearest" : "kappa");
+                                          has_radius ? "fixed_radius" : has_nearest ? "nearest" : "kappa");
     o.mode = mode == "fixed_radius" ? mls::SupportMode::fixed_radius
              : mode == "nearest"    ? mls::SupportMode::nearest
              : mode == "all"        ? mls::SupportMode::all
@@ -39,7 +39,8 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
     const std::string shape = support.word("shape", {"box", "sphere"}, default_shape);
     o.shape = shape == "sphere" ? mls::SupportShape::sphere : mls::SupportShape::box;
     const int m = (o.basis == mls::Basis::linear ? dimension + 1 : (dimension + 1) * (dimension + 2) / 2);
-    if (o.mode == mls::SupportMode::kappa) {
+    if (o.mode == mls::SupportMode::kappa || o.mode == mls::SupportMode::nearest) {
+      // (nearest = the seed's SELECT: supports sized by kappa as in mode kappa, then the N nearest kept)
       if (support.child("kappa").is_sequence()) {
         // one factor per axis (box supports only)
         if (shape != "box") support.child("kappa").error("a single number for a sphere support");
@@ -61,7 +62,7 @@ mls::MlsOptions read_mls_options(const io::NodeReader& section, int dimension) {
     }
     if (o.mode == mls::SupportMode::nearest || o.mode == mls::SupportMode::all || o.mode == mls::SupportMode::variable)
       o.nearest = static_cast<int>(support.integer("nearest", 27, m + 1, 100000));
-    if (o.mode != mls::SupportMode::kappa && o.mode != mls::SupportMode::fixed_radius)
+    if (o.mode == mls::SupportMode::all || o.mode == mls::SupportMode::variable)
       o.scale = support.real("scale", 1.0, 0.0, 100.0, true);
     support.reject_unknown_keys();
     if (o.mode == mls::SupportMode::fixed_radius && o.shape == mls::SupportShape::sphere) {

@@ -222,7 +222,7 @@ void EfgAnalysis::setup() {
     // face sums of neighbouring cells would not cancel)
     const bool can_smooth = o.formulation == Formulation::galerkin && !o.projected_volumetric &&
                             *std::min_element(o.gauss.begin(), o.gauss.end()) >= 2 &&
-                            o.mls.mode != mls::SupportMode::nearest;
+                            o.mls.mode != mls::SupportMode::nearest && o.mls.mode != mls::SupportMode::variable;
     const bool smooth = can_smooth && (!on_grid || (curved && turn <= largest_smoothed_turn));
     problem_.options.correction = smooth ? IntegrationCorrection::smoothed : IntegrationCorrection::none;
     if (smooth)

@@ -19,17 +19,21 @@ enum class SupportShape { box, sphere };
 /// How support sizes are chosen (names of the seed's OMLL program in brackets).
 ///  kappa        node-centred, R_I,d = kappa * h_I,d (h_I = local nodal spacing)        [default]
 ///  fixed_radius node-centred, R_d = radius[d] for every node                          [INFLENCEDOMAIN Fix]
-///  nearest      point-centred: neighbours = the N nearest nodes of x,
-///               R(x) = scale * (distance to the N-th nearest)                          [SELECT]
+///  nearest      node-centred supports sized as in mode kappa; of the nodes whose supports cover x,
+///               only the N nearest are neighbours                                      [SELECT]
 ///  all          node-centred, R_I = scale * (distance from node I to its N-th nearest other node) [ALL]
-///  variable     point-centred: R(x) = scale * (distance from x to its N-th nearest node),
-///               neighbours = every node inside that support (= the N nearest when scale = 1) [VARIABLE]
-/// Sphere supports use one radius; box supports use R_d per axis in kappa / fixed_radius modes and the
-/// same R on every axis in the other modes. Distances use the first `dimension` coordinates only.
-/// With scale = 1 the N-th nearest node lies just inside the support (radius times 1 + support_epsilon),
-/// so its weight is negligible (about 1e-27 for the quartic spline): choose N > m, or scale > 1.
-/// In the point-centred modes the derivatives are taken with R(x) held fixed (R(x) is only piecewise
-/// smooth), see MlsShapeFunctions.
+///  variable     point-centred: neighbours = the N nearest nodes of x, weighted from x with
+///               R(x) = scale * (distance from x to its N-th nearest node)              [VARIABLE]
+/// (seed 004 section 2.3.1, the OMLL member InflType_.) "Nearest" and the distances of modes all and
+/// variable are measured in units of the mean nodal spacing per axis when those spacings differ by more
+/// than a factor 1.5 (a plate or shell lattice: the 27 nearest then span three layers as on a cube
+/// lattice; on an isotropic cloud plain distances). Sphere supports then become ellipsoids of per-axis
+/// radii R_d = R / (spacing units per length)_d. Distances use the first `dimension` coordinates only.
+/// In mode variable with scale = 1 the N-th nearest node lies just inside the support (radius times
+/// 1 + support_epsilon), so its weight is negligible (about 1e-27 for the quartic spline): choose
+/// scale > 1. In modes nearest and variable the neighbour set changes abruptly where the N nearest do,
+/// so the shape functions jump there; in mode variable the derivatives are taken with R(x) held fixed
+/// (R(x) is only piecewise smooth), see MlsShapeFunctions.
 enum class SupportMode { kappa, fixed_radius, nearest, all, variable };
 
 /// Every radius is multiplied by (1 + support_epsilon) so that nodes lying exactly at kappa * h
@@ -74,10 +78,11 @@ struct MlsOptions {
   Vec3 interface_point = Vec3::Zero();
   Vec3 interface_normal = Vec3::UnitZ();     // unit vector
   int nearest = 27;                         // modes nearest / all / variable: N
-  Real scale = 1.0;                         // modes nearest / all / variable: radius = scale * distance to N-th
-  /// SINCHECK remedy. Radius modes (kappa, fixed_radius, all): the radii used at this evaluation point
-  /// are multiplied by 1.25 per step (at most remedy_max_steps steps); nearest-N modes (nearest,
-  /// variable): N grows by 1 per step (at most remedy_max_steps steps or all nodes).
+  Real scale = 1.0;                         // modes all / variable: radius = scale * distance to N-th
+  /// SINCHECK remedy. Radius modes (kappa, fixed_radius, all, and nearest where fewer than N supports
+  /// cover x): the radii used at this evaluation point are multiplied by 1.25 per step (at most
+  /// remedy_max_steps steps); N grows by 1 per step in mode variable and in mode nearest where more than
+  /// N supports cover x (at most remedy_max_steps steps or all nodes).
   bool singular_remedy = false;
   int remedy_max_steps = 64;
   /// Largest accepted estimate of the 1-norm condition number of the Jacobi-scaled moment matrix A.

@@ -23,6 +23,8 @@ namespace detail {
 struct MlsWorkspace {
   std::vector<std::pair<Index, Index>> candidates;  // (node index, slot in the unsorted buffers); grow-only
   std::vector<std::pair<Real, Index>> nearest;
+  std::vector<Real> ranking;        // SELECT: squared distance (spacing units) per candidate slot
+  bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
   std::vector<Real> unsorted_offsets, unsorted_inverse_radii;
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * n): x_d - x_I,d and 1 / R_I,d of the n neighbours
@@ -43,6 +45,25 @@ namespace {
 /// consistency (reproduction) conditions of the derivatives satisfied only to O(eps cond A) times the
 /// size of the intermediate terms; for cond <= 100 that is below 1e-12 on the test layouts.
 constexpr Real orthonormalise_condition = 1e2;
+
+/// Point-centred supports measure distances in units of the mean nodal spacing per axis when the
+/// largest of those spacings exceeds the smallest by this factor (a plate or shell lattice).
+constexpr Real anisotropic_lattice_ratio = 1.5;
+
+/// 1 / (mean nodal spacing) per axis of a clearly anisotropic lattice (mean spacings of two axes more
+/// than anisotropic_lattice_ratio apart), else 1 on every axis: an isotropic cloud keeps plain
+/// distances, not the noise of its per-axis estimates. Zero on unused axes.
+Vec3 spacing_metric(const Eigen::Matrix3Xd& spacing, int dimension) {
+  Vec3 metric = Vec3::Ones();
+  if (spacing.cols() > 0) {
+    const Vec3 mean = spacing.rowwise().mean();
+    const Real largest = mean.head(dimension).maxCoeff(), smallest = mean.head(dimension).minCoeff();
+    if (smallest > 0.0 && std::isfinite(largest) && largest > anisotropic_lattice_ratio * smallest)
+      for (int d = 0; d < dimension; ++d) metric[d] = 1.0 / mean[d];
+  }
+  for (int d = dimension; d < 3; ++d) metric[d] = 0.0;
+  return metric;
+}
 
 detail::MlsWorkspace& thread_workspace() {
   thread_local detail::MlsWorkspace workspace;
@@ -117,30 +138,33 @@ template <int Dim, Weight Kind, bool Second>
 void compute_sphere_weights(const WeightFunction& function, std::size_t n, const Real* offsets,
                             const Real* inverse_radii, Real* weights) {
   for (std::size_t j = 0; j < n; ++j) {
-    Real offset[3], inverse[3];
+    // u_d = dx_d / R_d (R_d equal on every axis for a sphere, unequal for an ellipsoid), s = |u|
+    Real scaled[3], inverse[3];
     for (int d = 0; d < Dim; ++d) {
-      offset[d] = offsets[d * n + j];
       inverse[d] = inverse_radii[d * n + j];
+      scaled[d] = offsets[d * n + j] * inverse[d];
     }
     Real squared = 0.0;
-    for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
-    const Real distance = std::sqrt(squared);
-    const Real inverse_squared = inverse[0] * inverse[0];
-    const WeightValue w = function.template evaluate_inside<Kind>(distance * inverse[0]);
+    for (int d = 0; d < Dim; ++d) squared += scaled[d] * scaled[d];
+    const Real s = std::sqrt(squared);
+    const WeightValue w = function.template evaluate_inside<Kind>(s);
     weights[j] = w.value;
-    const Real isotropic = w.first_over_s * inverse_squared;
-    for (int d = 0; d < Dim; ++d) weights[(1 + d) * n + j] = isotropic * offset[d];
+    // ds/dx_d = u_d / (s R_d): w_,d = (w'/s) u_d / R_d
+    Real gradient[3];
+    for (int d = 0; d < Dim; ++d) {
+      gradient[d] = scaled[d] * inverse[d];
+      weights[(1 + d) * n + j] = w.first_over_s * gradient[d];
+    }
     if constexpr (Second) {
-      Real unit[3] = {0.0, 0.0, 0.0};
-      if (distance > 0.0)
-        for (int d = 0; d < Dim; ++d) unit[d] = offset[d] / distance;
-      const Real radial = (w.second - w.first_over_s) * inverse_squared;
+      // w_,ab = (w'' - w'/s) (u_a / R_a)(u_b / R_b) / s^2 + (w'/s) delta_ab / R_a^2
+      const Real radial = s > 0.0 ? (w.second - w.first_over_s) / squared : 0.0;
       constexpr int first_index[6] = {0, 1, 2, 0, 1, 2};
       constexpr int second_index[6] = {0, 1, 2, 1, 2, 0};
       for (int k = 0; k < 6; ++k) {
         const int a = first_index[k], b = second_index[k];
         if (a >= Dim || b >= Dim) continue;
-        weights[(4 + k) * n + j] = radial * unit[a] * unit[b] + (a == b ? isotropic : 0.0);
+        weights[(4 + k) * n + j] =
+            radial * gradient[a] * gradient[b] + (a == b ? w.first_over_s * inverse[a] * inverse[a] : 0.0);
       }
     }
   }
@@ -267,11 +291,22 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
   projected_ = nodes_;
   projected_.bottomRows(3 - dimension).setZero();
   const Real widen = 1.0 + support_epsilon;
+  Eigen::Matrix3Xd estimate;  // nodal spacing, estimated once
+  if (options_.mode == SupportMode::nearest || options_.mode == SupportMode::all ||
+      options_.mode == SupportMode::variable) {
+    try {
+      if (count >= 2) estimate = estimate_nodal_spacing(projected_, dimension);
+    } catch (const InputError&) {
+      // all nodes coincide: no spacing, plain distances
+    }
+    metric_ = spacing_metric(estimate, dimension);
+  }
 
   switch (options_.mode) {
-    case SupportMode::kappa: {
+    case SupportMode::kappa:
+    case SupportMode::nearest: {
       if (spacing.cols() == 0) {
-        spacing_ = estimate_nodal_spacing(nodes_, dimension);
+        spacing_ = estimate.cols() == count ? std::move(estimate) : estimate_nodal_spacing(nodes_, dimension);
       } else {
         if (spacing.cols() != count)
           throw InputError("mls.spacing", fmt::format("3 x {} nodal spacings (one column per node)", count),
@@ -302,19 +337,21 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
       break;
     }
     case SupportMode::all: {
-      const Real mean = mean_nodal_spacing(projected_, dimension);
+      // the N-th nearest in spacing units (metric_): R_I,d = scale x that distance / metric_d
+      const PointMatrix scaled = metric_.asDiagonal() * projected_;
+      const Real mean = mean_nodal_spacing(scaled, dimension);
       const Index wanted = options_.nearest;
       radii_ = Eigen::Matrix3Xd::Zero(3, count);
       if (count >= 2 && mean > 0.0) {
-        const CellList search(projected_, mean * std::max(1.0, 0.6 * std::pow(static_cast<Real>(wanted), 1.0 / dimension)));
+        const CellList search(scaled, mean * std::max(1.0, 0.6 * std::pow(static_cast<Real>(wanted), 1.0 / dimension)));
 #pragma omp parallel
         {
           std::vector<std::pair<Real, Index>> nearest;
 #pragma omp for schedule(static)
           for (Index i = 0; i < count; ++i) {
-            search.nearest(projected_.col(i), wanted, nearest, i);
+            search.nearest(scaled.col(i), wanted, nearest, i);
             const Real distance = nearest.empty() ? 0.0 : std::sqrt(nearest.back().first);
-            radii_.col(i).head(dimension).setConstant(options_.scale * widen * distance);
+            for (int d = 0; d < dimension; ++d) radii_(d, i) = options_.scale * widen * distance / metric_[d];
           }
         }
       }
@@ -323,11 +360,9 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
                          "coincident nodes");
       break;
     }
-    case SupportMode::nearest:
     case SupportMode::variable:
       break;
   }
-
   Real cell_size = 1.0;
   if (node_centred()) {
     max_radius_ = radii_.rowwise().maxCoeff();
@@ -335,12 +370,13 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
     // than 3 cells of size R, and the cells of one x-row are contiguous anyway.
     cell_size = 0.5 * max_radius_.maxCoeff();
   } else {
-    const Real mean = mean_nodal_spacing(projected_, dimension);
+    metric_points_ = metric_.asDiagonal() * projected_;
+    const Real mean = mean_nodal_spacing(metric_points_, dimension);
     const Real wanted = static_cast<Real>(options_.nearest);
     cell_size = mean * std::max(1.0, 0.6 * std::pow(wanted, 1.0 / dimension));
   }
   if (!(cell_size > 0.0) || !std::isfinite(cell_size)) cell_size = 1.0;  // single node / coincident nodes
-  cells_ = CellList(projected_, cell_size);
+  cells_ = CellList(node_centred() ? projected_ : metric_points_, cell_size);
   if (node_centred()) {
     sorted_inverse_radii_ = Eigen::Matrix3Xd::Zero(3, count);
     for (Index k = 0; k < count; ++k)
@@ -349,8 +385,7 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
 }
 
 bool MlsShapeFunctions::node_centred() const {
-  return options_.mode == SupportMode::kappa || options_.mode == SupportMode::fixed_radius ||
-         options_.mode == SupportMode::all;
+  return options_.mode != SupportMode::variable;
 }
 
 template <int Dim>
@@ -410,17 +445,44 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
       cells_.for_each_candidate(low, high, [&](Index k) {
         const Real* p = points + 3 * k;
         const Real offset[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        // a sphere, or an ellipsoid of per-axis radii (mode all on an anisotropic lattice)
+        const Real* radius = node_inverse_radii + 3 * k;
+        const Real inverses[3] = {radius[0] * inverse_factor, radius[1] * inverse_factor, radius[2] * inverse_factor};
         Real squared = 0.0;
-        for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
-        const Real inverse = node_inverse_radii[3 * k] * inverse_factor;
-        if (!(squared * inverse * inverse < 1.0)) return;
-        const Real inverses[3] = {inverse, inverse, inverse};
+        for (int d = 0; d < Dim; ++d) squared += (offset[d] * inverses[d]) * (offset[d] * inverses[d]);
+        if (!(squared < 1.0)) return;
         accept(order[k], offset, inverses);
       });
     }
+    // SELECT: of the nodes whose supports cover x, the N nearest (spacing units, ties by node index).
+    workspace.capped = options_.mode == SupportMode::nearest && count > static_cast<std::size_t>(nearest_count);
+    if (workspace.capped) {
+      grow(workspace.ranking, count);
+      Real* key = workspace.ranking.data();
+      for (std::size_t c = 0; c < count; ++c) {
+        Real squared = 0.0;
+        for (int d = 0; d < Dim; ++d) {
+          const Real scaled = offsets[d * stride + c] * metric_[d];
+          squared += scaled * scaled;
+        }
+        key[c] = squared;
+      }
+      const auto nearer = [&](const std::pair<Index, Index>& a, const std::pair<Index, Index>& b) {
+        const Real ka = key[a.second], kb = key[b.second];
+        return ka < kb || (ka == kb && a.first < b.first);
+      };
+      std::nth_element(candidates, candidates + (nearest_count - 1), candidates + count, nearer);
+      count = static_cast<std::size_t>(nearest_count);
+    }
     // Basis scaling rho_d: the largest support radius among the neighbours.
     // (four independent minima per direction: one serial chain of min would cost its latency per neighbour)
-    for (int d = 0; d < 3; ++d) {
+    for (int d = 0; d < 3 && workspace.capped; ++d) {
+      Real smallest = std::numeric_limits<Real>::infinity();
+      for (std::size_t j = 0; j < count; ++j)
+        smallest = std::min(smallest, inverse_radii[d * stride + static_cast<std::size_t>(candidates[j].second)]);
+      rho[d] = 1.0 / smallest;
+    }
+    for (int d = 0; d < 3 && !workspace.capped; ++d) {
       Real smallest[4];
       std::fill_n(smallest, 4, std::numeric_limits<Real>::infinity());
       const Real* inverse = inverse_radii + d * stride;
@@ -431,39 +493,34 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
       rho[d] = 1.0 / std::min(std::min(smallest[0], smallest[1]), std::min(smallest[2], smallest[3]));
     }
   } else {
-    cells_.nearest(x, nearest_count, workspace.nearest);
+    // VARIABLE: the N nearest nodes of x in spacing units (metric_), weighted from x with the radius
+    // scale x (distance to the N-th): a sphere or box there, an ellipsoid or box of radii
+    // R_d = radius / metric_d in space.
+    workspace.capped = false;
+    const Vec3 scaled_x = metric_.cwiseProduct(x);
+    cells_.nearest(scaled_x, nearest_count, workspace.nearest);
     const Real point_radius = workspace.nearest.empty()
                                   ? 0.0
                                   : options_.scale * (1.0 + support_epsilon) * std::sqrt(workspace.nearest.back().first);
     if (!(point_radius > 0.0)) return 0;
     const Real inverse = 1.0 / point_radius;
-    const Real inverses[3] = {inverse, inverse, inverse};
-    auto consider = [&](Index index, const Real* offset) {
+    Real inverses[3] = {0.0, 0.0, 0.0};
+    for (int d = 0; d < Dim; ++d) inverses[d] = metric_[d] * inverse;
+    auto consider = [&](Index index) {
+      const Real offset[3] = {x[0] - projected_(0, index), x[1] - projected_(1, index), x[2] - projected_(2, index)};
       if (box) {
         for (int d = 0; d < Dim; ++d)
-          if (!(std::abs(offset[d]) < point_radius)) return;
+          if (!(std::abs(offset[d]) * inverses[d] < 1.0)) return;
       } else {
         Real squared = 0.0;
-        for (int d = 0; d < Dim; ++d) squared += offset[d] * offset[d];
-        if (!(squared < point_radius * point_radius)) return;
+        for (int d = 0; d < Dim; ++d) squared += (offset[d] * inverses[d]) * (offset[d] * inverses[d]);
+        if (!(squared < 1.0)) return;
       }
       accept(index, offset, inverses);
     };
-    if (options_.mode == SupportMode::nearest) {
-      reserve(static_cast<Index>(workspace.nearest.size()));
-      for (const auto& [distance_squared, index] : workspace.nearest) {
-        const Real offset[3] = {x[0] - projected_(0, index), x[1] - projected_(1, index), x[2] - projected_(2, index)};
-        consider(index, offset);
-      }
-    } else {
-      const Vec3 reach = Vec3::Constant(point_radius);
-      reserve(cells_.count_candidates(x - reach, x + reach));
-      cells_.for_each_candidate(x - reach, x + reach, [&](Index k) {
-        const Real offset[3] = {x[0] - sorted(0, k), x[1] - sorted(1, k), x[2] - sorted(2, k)};
-        consider(order[k], offset);
-      });
-    }
-    rho.setConstant(point_radius);
+    reserve(static_cast<Index>(workspace.nearest.size()));
+    for (const auto& [distance_squared, index] : workspace.nearest) consider(index);
+    for (int d = 0; d < 3; ++d) rho[d] = d < Dim ? point_radius / metric_[d] : 1.0;
   }
   for (int d = 0; d < 3; ++d)
     if (!(rho[d] > 0.0) || !std::isfinite(rho[d])) rho[d] = 1.0;
@@ -474,7 +531,7 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   workspace.indices.resize(n);
   grow(workspace.offsets, 3 * n);
   grow(workspace.inverse_radii, 3 * n);
-  if (std::is_sorted(candidates, candidates + n)) {
+  if (!workspace.capped && std::is_sorted(candidates, candidates + n)) {
     for (std::size_t j = 0; j < n; ++j) workspace.indices[j] = candidates[j].first;
     for (int d = 0; d < 3; ++d) {
       std::copy_n(offsets + d * stride, n, workspace.offsets.data() + d * n);
@@ -573,10 +630,13 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     }
     if constexpr (Enriched) return false;  // the caller falls back to the polynomial basis
     // Nothing more to gain once every node is a neighbour (radius modes) or N = all nodes.
+    // (SELECT: one more node while the N nearest are a choice among more covering nodes, else wider supports)
+    const bool capped = workspace.capped;
     const bool can_grow = node_centred_mode ? n < node_count() : nearest_count < node_count();
     if (!remedy || step >= options_.remedy_max_steps || !can_grow) throw_singular(x_in, n, condition, remedy);
     ++step;
-    if (node_centred_mode) radius_factor *= 1.25;
+    if (capped) ++nearest_count;
+    else if (node_centred_mode) radius_factor *= 1.25;
     else ++nearest_count;
   }
   out.remedy_steps = step;

@@ -47,7 +47,7 @@ FieldValue approximate_field(const ShapeFunctionValues& shape, const Eigen::Ref<
 ///   phi_I,ij = w_I,ij p_I.r + w_I,i p_I.r_,j + w_I,j p_I.r_,i + w_I p_I.r_,ij,
 ///   r_,ij = A^-1 (p_,ij - A_,i r_,j - A_,j r_,i - A_,ij r),
 /// where the products A_,i v = sum_I w_I,i (p_I.v) p_I are formed without building A_,i.
-/// In the point-centred modes (nearest, variable) the radius R(x) is frozen at x while differentiating:
+/// In the point-centred mode (variable) the radius R(x) is frozen at x while differentiating:
 /// the derivatives are those of the MLS approximant with that radius (R(x) is only piecewise smooth).
 ///
 /// Evaluation is thread-safe: scratch memory is thread-local, nothing shared is modified.
@@ -115,6 +115,11 @@ class MlsShapeFunctions {
   Eigen::Matrix3Xd radii_;        // node-centred modes: per node and axis (original order)
   Eigen::Matrix3Xd sorted_inverse_radii_;  // 1 / radii_ in the cell list's order (unused axes: 0)
   Vec3 max_radius_ = Vec3::Zero();
+  /// Point-centred modes: 1 / (mean nodal spacing) per axis; distances for "the N nearest" and the
+  /// support radius are measured in these units (a regular lattice of any aspect is then a unit cube
+  /// lattice). Zero on unused axes; unused in the node-centred modes.
+  Vec3 metric_ = Vec3::Ones();
+  PointMatrix metric_points_;     // point-centred modes: metric_ * projected_ (the cell list's points)
   CellList cells_;
 };
 

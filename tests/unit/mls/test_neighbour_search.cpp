@@ -166,7 +166,9 @@ TEST(MlsNeighbours, NeighbourQueryAloneMatchesTheEvaluation) {
   }
 }
 
-TEST(MlsNeighbours, PointCentredModesMatchBruteForce) {
+TEST(MlsNeighbours, NearestCountModesMatchBruteForce) {
+  // SELECT (mode nearest): of the nodes whose kappa supports cover x, the N nearest (ties by index).
+  // VARIABLE: the N nearest nodes of x, weighted from x. An isotropic cloud: plain distances.
   const PointMatrix nodes = random_points(800, Vec3::Zero(), Vec3::Ones(), 3, 8);
   const PointMatrix queries = random_points(100, Vec3::Zero(), Vec3::Ones(), 3, 9);
   for (SupportShape shape : {SupportShape::box, SupportShape::sphere}) {
@@ -174,26 +176,68 @@ TEST(MlsNeighbours, PointCentredModesMatchBruteForce) {
     options.shape = shape;
     options.mode = SupportMode::nearest;
     options.nearest = 30;
+    options.kappa = shape == SupportShape::sphere ? 2.5 : 2.0;
     const MlsShapeFunctions nearest(nodes, options);
+    ASSERT_EQ(nearest.support_radii().cols(), nodes.cols());
     options.mode = SupportMode::variable;
     options.scale = 1.2;
     const MlsShapeFunctions variable(nodes, options);
+    Index capped = 0;
     for (Index q = 0; q < queries.cols(); ++q) {
       const Vec3 x = queries.col(q);
-      const auto sorted = brute_force_nearest(nodes, x, 30, -1);
-      IndexList expected;
-      for (const auto& entry : sorted) expected.push_back(entry.second);
-      std::sort(expected.begin(), expected.end());
-      EXPECT_EQ(nearest.evaluate(x, 0).neighbours, expected) << "nearest, query " << q;
-      // variable: every node inside R(x) = 1.2 (1 + eps) d_30(x)
-      const Real radius = 1.2 * (1.0 + support_epsilon) * std::sqrt(sorted.back().first);
-      expected.clear();
+      std::vector<std::pair<Real, Index>> covering;
       for (Index i = 0; i < nodes.cols(); ++i) {
         const Vec3 offset = x - nodes.col(i);
-        const bool inside = shape == SupportShape::box ? offset.cwiseAbs().maxCoeff() < radius : offset.norm() < radius;
-        if (inside) expected.push_back(i);
+        const Vec3 radius = nearest.support_radii().col(i);
+        const bool inside = shape == SupportShape::box ? (offset.cwiseAbs().array() < radius.array()).all()
+                                                       : offset.norm() < radius[0];
+        if (inside) covering.emplace_back(offset.squaredNorm(), i);
       }
+      std::sort(covering.begin(), covering.end());
+      capped += covering.size() > 30 ? 1 : 0;
+      if (covering.size() > 30) covering.resize(30);
+      IndexList expected;
+      for (const auto& entry : covering) expected.push_back(entry.second);
+      std::sort(expected.begin(), expected.end());
+      EXPECT_EQ(nearest.evaluate(x, 0).neighbours, expected) << "nearest, query " << q;
+      // variable: the 30 nearest, all inside R(x) = 1.2 (1 + eps) d_30(x)
+      expected.clear();
+      for (const auto& entry : brute_force_nearest(nodes, x, 30, -1)) expected.push_back(entry.second);
+      std::sort(expected.begin(), expected.end());
       EXPECT_EQ(variable.evaluate(x, 0).neighbours, expected) << "variable, query " << q;
+    }
+    EXPECT_GT(capped, 40) << "the cap of 30 should bind at many queries (both paths tested), bound at " << capped;
+  }
+}
+
+TEST(MlsNeighbours, NearestCountsSpacingsOnAPlateLattice) {
+  // 9 x 9 x 3 nodes, in-plane spacing 0.5, through-thickness 0.1 (a plate): "the 27 nearest" are counted
+  // in units of the spacing per axis, so every point's neighbours hold all three layers and the quadratic
+  // basis is regular (in plain distances the 27 nearest of a point near a face lie in two layers).
+  const PointMatrix grid = regular_grid({9, 9, 3}, Vec3(0.5, 0.5, 0.1));
+  const PointMatrix queries = random_points(60, Vec3(0.5, 0.5, 0.0), Vec3(3.5, 3.5, 0.2), 3, 12);
+  for (SupportMode mode : {SupportMode::nearest, SupportMode::variable, SupportMode::all}) {
+    MlsOptions options;
+    options.shape = SupportShape::sphere;
+    options.mode = mode;
+    options.nearest = 27;
+    options.kappa = 2.5;
+    options.scale = 1.5;
+    const MlsShapeFunctions mls(grid, options);
+    for (Index q = 0; q < queries.cols(); ++q) {
+      const Vec3 x = queries.col(q);
+      ShapeFunctionValues values;
+      ASSERT_NO_THROW(mls.evaluate(x, 1, values)) << to_string(mode) << ", query " << q;
+      bool layer[3] = {false, false, false};
+      for (Index i : values.neighbours) layer[static_cast<int>(std::lround(grid(2, i) / 0.1))] = true;
+      EXPECT_TRUE(layer[0] && layer[1] && layer[2]) << to_string(mode) << ", query " << q;
+      // and the quadratic field 1 + x z - y^2 + 3 z^2 is reproduced
+      Eigen::VectorXd u(grid.cols());
+      for (Index i = 0; i < grid.cols(); ++i)
+        u[i] = 1.0 + grid(0, i) * grid(2, i) - grid(1, i) * grid(1, i) + 3.0 * grid(2, i) * grid(2, i);
+      const FieldValue field = approximate_field(values, u);
+      EXPECT_NEAR(field.value, 1.0 + x[0] * x[2] - x[1] * x[1] + 3.0 * x[2] * x[2], 1e-9);
+      EXPECT_NEAR(field.gradient[2], x[0] + 6.0 * x[2], 1e-7);
     }
   }
 }
