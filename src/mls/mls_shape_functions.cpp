@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <stdexcept>
@@ -23,7 +25,7 @@ namespace detail {
 struct MlsWorkspace {
   std::vector<std::pair<Index, Index>> candidates;  // (node index, slot in the unsorted buffers); grow-only
   std::vector<std::pair<Real, Index>> nearest;
-  std::vector<Real> ranking;        // SELECT: squared distance (spacing units) per candidate slot
+  std::vector<Index> positions;     // node-centred gather: cell-order positions of the neighbours
   bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
   std::vector<Real> unsorted_offsets, unsorted_inverse_radii;
   IndexList indices;                // neighbours, ascending
@@ -57,7 +59,11 @@ Vec3 spacing_metric(const Eigen::Matrix3Xd& spacing, int dimension) {
   Vec3 metric = Vec3::Ones();
   if (spacing.cols() > 0) {
     const Vec3 mean = spacing.rowwise().mean();
-    const Real largest = mean.head(dimension).maxCoeff(), smallest = mean.head(dimension).minCoeff();
+    Real largest = mean[0], smallest = mean[0];
+    for (int d = 1; d < dimension; ++d) {
+      largest = std::max(largest, mean[d]);
+      smallest = std::min(smallest, mean[d]);
+    }
     if (smallest > 0.0 && std::isfinite(largest) && largest > anisotropic_lattice_ratio * smallest)
       for (int d = 0; d < dimension; ++d) metric[d] = 1.0 / mean[d];
   }
@@ -219,22 +225,62 @@ void weighted_gram(const BasisMatrix& basis, const Eigen::Map<const Eigen::Vecto
   }
 }
 
-/// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan).
-template <int Dim, Basis B, class BasisMatrix>
-void moment_matrix(const BasisMatrix& basis, const Eigen::Map<const Eigen::VectorXd>& weights, Real* weighted_storage,
+using Real4 = Real __attribute__((vector_size(32)));  // four doubles (one AVX2 register)
+
+/// Four consecutive values from p (unaligned).
+inline Real4 load4(const Real* p) {
+  Real4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+/// Calls block(offset j, lanes) for j = 0, 4, 8, ... over n entries: full blocks read columns in place,
+/// the last partial block (n % 4 entries) reads zero-padded copies of the `columns` arrays of
+/// column_stride values (so sums over the lanes need no tail loop).
+template <int Columns, class Block>
+void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Block&& block) {
+  Index j = 0;
+  for (; j + 4 <= n; j += 4) {
+    Real4 lanes[Columns];
+    for (int c = 0; c < Columns; ++c) lanes[c] = load4(columns[c] + j);
+    block(lanes);
+  }
+  if (j < n) {
+    Real4 lanes[Columns];
+    for (int c = 0; c < Columns; ++c) {
+      lanes[c] = Real4{0.0, 0.0, 0.0, 0.0};
+      for (Index l = 0; j + l < n; ++l) lanes[c][l] = columns[c][j + l];
+    }
+    block(lanes);
+  }
+}
+
+inline Real sum_lanes(const Real4& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
+using Mask4 = std::int64_t __attribute__((vector_size(32)));  // lane masks of Real4 comparisons (0 / -1)
+
+/// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), in one
+/// pass over the neighbours, four at a time (one accumulator per moment).
+template <int Dim, Basis B>
+void moment_matrix(const Real* basis, const Real* weights, Index n,
                    Eigen::Matrix<Real, PolynomialBasis<Dim, B>::size, PolynomialBasis<Dim, B>::size>& a) {
   static constexpr MomentPlan<Dim, B> plan = MomentPlan<Dim, B>::make();
   constexpr int M = PolynomialBasis<Dim, B>::size;
-  Eigen::Map<Eigen::VectorXd> weighted(weighted_storage, basis.rows());
-  Real moments[plan.row.size()];
-  int column = -1;
-  for (int m = 0; m < plan.count; ++m) {
-    if (plan.column[m] != column) {
-      column = plan.column[m];
-      weighted = weights.cwiseProduct(basis.col(column));
-    }
-    moments[m] = weighted.dot(basis.col(plan.row[m]));
-  }
+  constexpr int C = plan.count;
+  const Real* columns[M + 1];
+  for (int k = 0; k < M; ++k) columns[k] = basis + k * n;
+  columns[M] = weights;
+  Real4 sums[C];
+  for (int m = 0; m < C; ++m) sums[m] = Real4{0.0, 0.0, 0.0, 0.0};
+  for_each_block_of_four<M + 1>(columns, n, [&](const Real4* lanes) {
+    Real4 weighted[M];
+#pragma GCC unroll 16
+    for (int k = 0; k < M; ++k) weighted[k] = lanes[M] * lanes[k];
+#pragma GCC unroll 64
+    for (int m = 0; m < C; ++m) sums[m] += weighted[plan.column[m]] * lanes[plan.row[m]];
+  });
+  Real moments[C];
+  for (int m = 0; m < C; ++m) moments[m] = sum_lanes(sums[m]);
   for (int b = 0; b < M; ++b)
     for (int row = b; row < M; ++row) a(row, b) = a(b, row) = moments[plan.moment_of[row][b]];
 }
@@ -252,11 +298,21 @@ void basis_times(const BasisMatrix& basis, const Vector& v, Out& out) {
   }
 }
 
-/// sum_j c_j b_j (M dot products over the columns).
+/// sum_j c_j b_j (M dot products over the columns, in one pass four neighbours at a time).
 template <int M, class BasisMatrix, class Vector>
 Eigen::Matrix<Real, M, 1> basis_transpose_times(const BasisMatrix& basis, const Vector& c) {
+  const Index n = basis.rows();
+  const Real* columns[M + 1];
+  for (int k = 0; k < M; ++k) columns[k] = basis.data() + k * n;
+  columns[M] = c.data();
+  Real4 sums[M];
+  for (int k = 0; k < M; ++k) sums[k] = Real4{0.0, 0.0, 0.0, 0.0};
+  for_each_block_of_four<M + 1>(columns, n, [&](const Real4* lanes) {
+#pragma GCC unroll 16
+    for (int k = 0; k < M; ++k) sums[k] += lanes[k] * lanes[M];
+  });
   Eigen::Matrix<Real, M, 1> result;
-  for (int k = 0; k < M; ++k) result[k] = basis.col(k).dot(c);
+  for (int k = 0; k < M; ++k) result[k] = sum_lanes(sums[k]);
   return result;
 }
 
@@ -300,6 +356,7 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
       // all nodes coincide: no spacing, plain distances
     }
     metric_ = spacing_metric(estimate, dimension);
+    spacing_units_ = (metric_.head(dimension).array() != 1.0).any();
   }
 
   switch (options_.mode) {
@@ -322,6 +379,10 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
           radii_.col(i).head(dimension) = widen * (options_.kappa_axes.head(dimension).array() + options_.delta).matrix().cwiseProduct(spacing_.col(i).head(dimension));
         } else if (options_.shape == SupportShape::box) {
           radii_.col(i).head(dimension) = (options_.kappa + options_.delta) * widen * spacing_.col(i).head(dimension);
+        } else if (options_.mode == SupportMode::nearest && spacing_units_) {
+          // SELECT on an anisotropic lattice: a sphere in units of the node's spacing per axis, as the
+          // nearest are counted (an ellipsoid of radii kappa h_I,d)
+          radii_.col(i).head(dimension) = options_.kappa * widen * spacing_.col(i).head(dimension);
         } else {
           radii_.col(i).head(dimension).setConstant(options_.kappa * widen * spacing_.col(i).head(dimension).maxCoeff());
         }
@@ -381,6 +442,13 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
     sorted_inverse_radii_ = Eigen::Matrix3Xd::Zero(3, count);
     for (Index k = 0; k < count; ++k)
       for (int d = 0; d < dimension; ++d) sorted_inverse_radii_(d, k) = 1.0 / radii_(d, cells_.order()[k]);
+    row_stride_ = static_cast<std::size_t>(count) + 4;
+    sorted_rows_.assign(6 * row_stride_, 0.0);
+    for (Index k = 0; k < count; ++k)
+      for (int d = 0; d < 3; ++d) {
+        sorted_rows_[d * row_stride_ + static_cast<std::size_t>(k)] = cells_.sorted_points()(d, k);
+        sorted_rows_[(3 + d) * row_stride_ + static_cast<std::size_t>(k)] = sorted_inverse_radii_(d, k);
+      }
   }
 }
 
@@ -420,78 +488,100 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   };
 
   if (node_centred()) {
+    // Pass 1 keeps the cell-order positions of the nodes whose supports cover x (one store per
+    // candidate, about half are rejected); pass 2 writes the kept ones' data in neighbour order.
     const Vec3 reach = max_radius_ * radius_factor;
     const Vec3 low = x - reach, high = x + reach;
-    reserve(cells_.count_candidates(low, high) + 1);
+    grow(workspace.positions, static_cast<std::size_t>(cells_.count_candidates(low, high) + 1));
+    Index* positions = workspace.positions.data();
     const Real* points = sorted.data();
     const Real* node_inverse_radii = sorted_inverse_radii_.data();
-    if (box) {
-      cells_.for_each_candidate(low, high, [&](Index k) {
-        const Real* p = points + 3 * k;
-        const Real* radius = node_inverse_radii + 3 * k;
-        const Real offset[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-        const Real inverse[3] = {radius[0] * inverse_factor, radius[1] * inverse_factor, radius[2] * inverse_factor};
-        bool inside = true;
-        for (int d = 0; d < Dim; ++d) inside &= std::abs(offset[d]) * inverse[d] < 1.0;
-        // Branch-free: write the candidate, keep it only if inside (about half are rejected).
-        candidates[count] = {order[k], static_cast<Index>(count)};
-        for (int d = 0; d < 3; ++d) {
-          offsets[d * stride + count] = offset[d];
-          inverse_radii[d * stride + count] = inverse[d];
+    // Four nodes at a time along each row of cells (lanes past the row's end are masked off).
+    const Real* rows[6];
+    for (int r = 0; r < 6; ++r) rows[r] = sorted_rows_.data() + static_cast<std::size_t>(r) * row_stride_;
+    const Real4 lane_index = {0.0, 1.0, 2.0, 3.0};
+    cells_.for_each_candidate_range(low, high, [&](Index begin, Index end) {
+      for (Index k = begin; k < end; k += 4) {
+        Mask4 inside = lane_index < static_cast<Real>(end - k);
+        if (box) {
+          for (int d = 0; d < Dim; ++d) {
+            const Real4 offset = x[d] - load4(rows[d] + k);
+            const Real4 magnitude = offset < 0.0 ? -offset : offset;
+            inside &= magnitude * (load4(rows[3 + d] + k) * inverse_factor) < 1.0;
+          }
+        } else {
+          // a sphere, or an ellipsoid of per-axis radii (mode all on an anisotropic lattice)
+          Real4 squared = {0.0, 0.0, 0.0, 0.0};
+          for (int d = 0; d < Dim; ++d) {
+            const Real4 scaled = (x[d] - load4(rows[d] + k)) * (load4(rows[3 + d] + k) * inverse_factor);
+            squared += scaled * scaled;
+          }
+          inside &= squared < 1.0;
         }
-        count += inside ? 1 : 0;
-      });
-    } else {
-      cells_.for_each_candidate(low, high, [&](Index k) {
-        const Real* p = points + 3 * k;
-        const Real offset[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-        // a sphere, or an ellipsoid of per-axis radii (mode all on an anisotropic lattice)
-        const Real* radius = node_inverse_radii + 3 * k;
-        const Real inverses[3] = {radius[0] * inverse_factor, radius[1] * inverse_factor, radius[2] * inverse_factor};
-        Real squared = 0.0;
-        for (int d = 0; d < Dim; ++d) squared += (offset[d] * inverses[d]) * (offset[d] * inverses[d]);
-        if (!(squared < 1.0)) return;
-        accept(order[k], offset, inverses);
-      });
-    }
+        for (int l = 0; l < 4; ++l) {
+          positions[count] = k + l;  // branch-free: kept only if inside
+          count += static_cast<std::size_t>(inside[l] & 1);
+        }
+      }
+    });
     // SELECT: of the nodes whose supports cover x, the N nearest (spacing units, ties by node index).
     workspace.capped = options_.mode == SupportMode::nearest && count > static_cast<std::size_t>(nearest_count);
     if (workspace.capped) {
-      grow(workspace.ranking, count);
-      Real* key = workspace.ranking.data();
+      auto& ranked = workspace.nearest;  // (squared distance in spacing units, node index) per position
+      ranked.resize(count);
       for (std::size_t c = 0; c < count; ++c) {
+        const Real* p = points + 3 * positions[c];
         Real squared = 0.0;
         for (int d = 0; d < Dim; ++d) {
-          const Real scaled = offsets[d * stride + c] * metric_[d];
+          const Real scaled = (x[d] - p[d]) * metric_[d];
           squared += scaled * scaled;
         }
-        key[c] = squared;
+        // rounded to float: nodes at equal distances on a lattice tie whatever the last bits of their
+        // computed distances (rounding differs between builds), and ties go to the lower node index
+        ranked[c] = {static_cast<Real>(static_cast<float>(squared)), order[positions[c]]};
       }
-      const auto nearer = [&](const std::pair<Index, Index>& a, const std::pair<Index, Index>& b) {
-        const Real ka = key[a.second], kb = key[b.second];
-        return ka < kb || (ka == kb && a.first < b.first);
-      };
-      std::nth_element(candidates, candidates + (nearest_count - 1), candidates + count, nearer);
+      grow(workspace.candidates, count);
+      std::pair<Index, Index>* slots = workspace.candidates.data();  // (rank key index, position)
+      for (std::size_t c = 0; c < count; ++c) slots[c] = {static_cast<Index>(c), positions[c]};
+      std::nth_element(slots, slots + (nearest_count - 1), slots + count,
+                       [&](const auto& a, const auto& b) { return ranked[a.first] < ranked[b.first]; });
       count = static_cast<std::size_t>(nearest_count);
+      for (std::size_t c = 0; c < count; ++c) positions[c] = slots[c].second;
+    }
+    // Pass 2: neighbour data (rows of n), ascending node index (the cells deliver structured grids
+    // already sorted; otherwise the positions are sorted by node index first).
+    const auto n = count;
+    bool ascending = true;
+    for (std::size_t j = 1; j < n && ascending; ++j) ascending = order[positions[j - 1]] < order[positions[j]];
+    if (!ascending)
+      std::sort(positions, positions + n, [&](Index a, Index b) { return order[a] < order[b]; });
+    workspace.indices.resize(n);
+    grow(workspace.offsets, 3 * n);
+    grow(workspace.inverse_radii, 3 * n);
+    Real* offset_rows = workspace.offsets.data();
+    Real* inverse_rows = workspace.inverse_radii.data();
+    for (std::size_t j = 0; j < n; ++j) {
+      const Index k = positions[j];
+      workspace.indices[j] = order[k];
+      for (int d = 0; d < 3; ++d) {
+        offset_rows[d * n + j] = x[d] - points[3 * k + d];
+        inverse_rows[d * n + j] = node_inverse_radii[3 * k + d] * inverse_factor;
+      }
     }
     // Basis scaling rho_d: the largest support radius among the neighbours.
     // (four independent minima per direction: one serial chain of min would cost its latency per neighbour)
-    for (int d = 0; d < 3 && workspace.capped; ++d) {
-      Real smallest = std::numeric_limits<Real>::infinity();
-      for (std::size_t j = 0; j < count; ++j)
-        smallest = std::min(smallest, inverse_radii[d * stride + static_cast<std::size_t>(candidates[j].second)]);
-      rho[d] = 1.0 / smallest;
-    }
-    for (int d = 0; d < 3 && !workspace.capped; ++d) {
+    for (int d = 0; d < 3; ++d) {
       Real smallest[4];
       std::fill_n(smallest, 4, std::numeric_limits<Real>::infinity());
-      const Real* inverse = inverse_radii + d * stride;
+      const Real* inverse = inverse_rows + d * n;
       std::size_t j = 0;
-      for (; j + 4 <= count; j += 4)
+      for (; j + 4 <= n; j += 4)
         for (int l = 0; l < 4; ++l) smallest[l] = std::min(smallest[l], inverse[j + static_cast<std::size_t>(l)]);
-      for (; j < count; ++j) smallest[0] = std::min(smallest[0], inverse[j]);
+      for (; j < n; ++j) smallest[0] = std::min(smallest[0], inverse[j]);
       rho[d] = 1.0 / std::min(std::min(smallest[0], smallest[1]), std::min(smallest[2], smallest[3]));
+      if (!(rho[d] > 0.0) || !std::isfinite(rho[d])) rho[d] = 1.0;
     }
+    return static_cast<Index>(n);
   } else {
     // VARIABLE: the N nearest nodes of x in spacing units (metric_), weighted from x with the radius
     // scale x (distance to the N-th): a sphere or box there, an ellipsoid or box of radii
@@ -531,7 +621,7 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   workspace.indices.resize(n);
   grow(workspace.offsets, 3 * n);
   grow(workspace.inverse_radii, 3 * n);
-  if (!workspace.capped && std::is_sorted(candidates, candidates + n)) {
+  if (std::is_sorted(candidates, candidates + n)) {
     for (std::size_t j = 0; j < n; ++j) workspace.indices[j] = candidates[j].first;
     for (int d = 0; d < 3; ++d) {
       std::copy_n(offsets + d * stride, n, workspace.offsets.data() + d * n);
@@ -620,7 +710,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
         for (Index j = 0; j < n; ++j)
           basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
       if constexpr (Enriched) weighted_gram<M>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
-      else moment_matrix<Dim, B>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
+      else moment_matrix<Dim, B>(workspace.basis.data(), workspace.weights.data(), n, a);
       regular = factor.factor(a, options_.max_condition);
       condition = factor.condition();
     }

@@ -114,11 +114,17 @@ class MlsShapeFunctions {
   Eigen::Matrix3Xd spacing_;
   Eigen::Matrix3Xd radii_;        // node-centred modes: per node and axis (original order)
   Eigen::Matrix3Xd sorted_inverse_radii_;  // 1 / radii_ in the cell list's order (unused axes: 0)
+  /// Node-centred modes: the same points and inverse radii as six rows (x y z 1/Rx 1/Ry 1/Rz) of
+  /// node_count() + 4 values in the cell list's order, so that the support test runs four nodes at a
+  /// time over each row of cells.
+  std::vector<Real> sorted_rows_;
+  std::size_t row_stride_ = 0;
   Vec3 max_radius_ = Vec3::Zero();
   /// Point-centred modes: 1 / (mean nodal spacing) per axis; distances for "the N nearest" and the
   /// support radius are measured in these units (a regular lattice of any aspect is then a unit cube
   /// lattice). Zero on unused axes; unused in the node-centred modes.
   Vec3 metric_ = Vec3::Ones();
+  bool spacing_units_ = false;    // metric_ is not 1 (an anisotropic lattice)
   PointMatrix metric_points_;     // point-centred modes: metric_ * projected_ (the cell list's points)
   CellList cells_;
 };
