@@ -234,6 +234,23 @@ inline Real4 load4(const Real* p) {
   return v;
 }
 
+/// The first `lanes` (1..4) values from p, the other lanes zero.
+inline Real4 load4(const Real* p, Index lanes) {
+  if (lanes == 4) return load4(p);
+  Real4 v = {0.0, 0.0, 0.0, 0.0};
+  for (Index l = 0; l < lanes; ++l) v[l] = p[l];
+  return v;
+}
+
+/// Stores the first `lanes` (1..4) values of v at p.
+inline void store4(Real* p, const Real4& v, Index lanes) {
+  if (lanes == 4) {
+    std::memcpy(p, &v, sizeof v);
+    return;
+  }
+  for (Index l = 0; l < lanes; ++l) p[l] = v[l];
+}
+
 /// Calls block(offset j, lanes) for j = 0, 4, 8, ... over n entries: full blocks read columns in place,
 /// the last partial block (n % 4 entries) reads zero-padded copies of the `columns` arrays of
 /// column_stride values (so sums over the lanes need no tail loop).
@@ -786,10 +803,10 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     return g;
   };
   const VectorM r = solve(prepare(unit));
-  basis_times<M>(basis, r, projection);
   out.neighbours.assign(workspace.indices.begin(), workspace.indices.end());
-  out.phi = weight(0).cwiseProduct(projection);
   if (derivative_order < 1) {
+    basis_times<M>(basis, r, projection);
+    out.phi = weight(0).cwiseProduct(projection);
     out.dphi.resize(3, 0);
     out.ddphi.resize(6, 0);
     return true;
@@ -797,14 +814,56 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
 
   // First derivatives (eq 1-20): phi_I,i = w_I,i p_I.r + w_I p_I.r_,i with
   // r_,i = A^-1 (p_,i - A_,i r) and A_,i r = sum_J w_J,i (p_J . r) p_J.
+  // Two sweeps over the neighbours, four at a time: the first forms p_J.r, phi and the sums A_,i r,
+  // the second p_J.r_,i and phi_,i.
+  out.phi.resize(n);
   out.dphi.setZero(3, n);
-  for (int i = 0; i < Dim; ++i) {
-    combined = weight(1 + i).cwiseProduct(projection);
-    const VectorM right = prepare(first_derivative(i)) - basis_transpose_times<M>(basis, combined);
-    const VectorM r_first = solve(right);
-    auto t = first_projection(i);
-    basis_times<M>(basis, r_first, t);
-    out.dphi.row(i) = (combined + weight(0).cwiseProduct(t)).transpose();
+  {
+    const Real* columns = basis.data();  // column k at k * n
+    Real* q = projection.data();
+    Real* phi = out.phi.data();
+    Real4 sums[Dim][M];
+    for (int i = 0; i < Dim; ++i)
+      for (int k = 0; k < M; ++k) sums[i][k] = Real4{0.0, 0.0, 0.0, 0.0};
+    auto first_sweep = [&](Index j, Index lanes) {
+      Real4 b[M];
+      for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
+      Real4 projected = b[0] * r[0];
+      for (int k = 1; k < M; ++k) projected += b[k] * r[k];
+      const Real4 value = load4(weights + j, lanes) * projected;
+      store4(q + j, projected, lanes);
+      store4(phi + j, value, lanes);
+      for (int i = 0; i < Dim; ++i) {
+        const Real4 c = load4(weights + (1 + i) * n + j, lanes) * projected;
+        for (int k = 0; k < M; ++k) sums[i][k] += c * b[k];
+      }
+    };
+    Index j = 0;
+    for (; j + 4 <= n; j += 4) first_sweep(j, 4);
+    if (j < n) first_sweep(j, n - j);
+    VectorM r_first[Dim];
+    for (int i = 0; i < Dim; ++i) {
+      VectorM products;
+      for (int k = 0; k < M; ++k) products[k] = sum_lanes(sums[i][k]);
+      r_first[i] = solve(VectorM(prepare(first_derivative(i)) - products));
+    }
+    Real* dphi = out.dphi.data();  // (i, J) at 3 J + i
+    const bool keep = derivative_order >= 2;
+    auto second_sweep = [&](Index j, Index lanes) {
+      Real4 b[M];
+      for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
+      const Real4 projected = load4(q + j, lanes);
+      const Real4 w = load4(weights + j, lanes);
+      for (int i = 0; i < Dim; ++i) {
+        Real4 t = b[0] * r_first[i][0];
+        for (int k = 1; k < M; ++k) t += b[k] * r_first[i][k];
+        if (keep) store4(scratch + (1 + i) * n + j, t, lanes);  // p_J . r_,i for the second derivatives
+        const Real4 d = load4(weights + (1 + i) * n + j, lanes) * projected + w * t;
+        for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[l];
+      }
+    };
+    for (j = 0; j + 4 <= n; j += 4) second_sweep(j, 4);
+    if (j < n) second_sweep(j, n - j);
   }
   if (derivative_order < 2) {
     out.ddphi.resize(6, 0);
