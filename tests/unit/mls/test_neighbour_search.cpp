@@ -210,6 +210,28 @@ TEST(MlsNeighbours, NearestCountModesMatchBruteForce) {
   }
 }
 
+TEST(MlsNeighbours, SelectWithACapThatNeverBindsIsModeKappa) {
+  // SELECT (mode nearest) = the kappa supports that cover x, capped to the N nearest: with N above every
+  // covering count the neighbours and the shape functions are those of mode kappa.
+  const PointMatrix grid = regular_grid({7, 6, 5}, Vec3(0.2, 0.25, 0.3));
+  const PointMatrix queries = random_points(40, Vec3::Zero(), Vec3(1.2, 1.25, 1.2), 3, 21);
+  for (SupportShape shape : {SupportShape::box, SupportShape::sphere}) {
+    MlsOptions options;
+    options.shape = shape;
+    options.kappa = 2.5;
+    const MlsShapeFunctions kappa(grid, options);
+    options.mode = SupportMode::nearest;
+    options.nearest = 100000;
+    const MlsShapeFunctions select(grid, options);
+    for (Index q = 0; q < queries.cols(); ++q) {
+      const ShapeFunctionValues a = kappa.evaluate(queries.col(q), 1), b = select.evaluate(queries.col(q), 1);
+      ASSERT_EQ(a.neighbours, b.neighbours) << to_string(shape) << ", query " << q;
+      EXPECT_LT((a.phi - b.phi).cwiseAbs().maxCoeff(), 1e-14);
+      EXPECT_LT((a.dphi - b.dphi).cwiseAbs().maxCoeff(), 1e-12);
+    }
+  }
+}
+
 TEST(MlsNeighbours, NearestCountsSpacingsOnAPlateLattice) {
   // 9 x 9 x 3 nodes, in-plane spacing 0.5, through-thickness 0.1 (a plate): "the 27 nearest" are counted
   // in units of the spacing per axis, so every point's neighbours hold all three layers and the quadratic
