@@ -274,6 +274,18 @@ void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Bloc
 
 inline Real sum_lanes(const Real4& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
 
+/// a * b + c, fused where the CPU has FMA (x86-64-v3). The build turns off the compiler's own
+/// contraction (CMakeLists.txt: it changed an MPM case's rounding-sensitive path); these sums of
+/// products are only rounded better by it.
+inline Real4 multiply_add(const Real4& a, const Real4& b, const Real4& c) {
+#ifdef __FMA__
+  return __builtin_ia32_vfmaddpd256(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+inline Real4 multiply_add(const Real4& a, Real b, const Real4& c) { return multiply_add(a, Real4{b, b, b, b}, c); }
+
 using Mask4 = std::int64_t __attribute__((vector_size(32)));  // lane masks of Real4 comparisons (0 / -1)
 
 /// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), in one
@@ -294,7 +306,7 @@ void moment_matrix(const Real* basis, const Real* weights, Index n,
 #pragma GCC unroll 16
     for (int k = 0; k < M; ++k) weighted[k] = lanes[M] * lanes[k];
 #pragma GCC unroll 64
-    for (int m = 0; m < C; ++m) sums[m] += weighted[plan.column[m]] * lanes[plan.row[m]];
+    for (int m = 0; m < C; ++m) sums[m] = multiply_add(weighted[plan.column[m]], lanes[plan.row[m]], sums[m]);
   });
   Real moments[C];
   for (int m = 0; m < C; ++m) moments[m] = sum_lanes(sums[m]);
@@ -326,7 +338,7 @@ Eigen::Matrix<Real, M, 1> basis_transpose_times(const BasisMatrix& basis, const 
   for (int k = 0; k < M; ++k) sums[k] = Real4{0.0, 0.0, 0.0, 0.0};
   for_each_block_of_four<M + 1>(columns, n, [&](const Real4* lanes) {
 #pragma GCC unroll 16
-    for (int k = 0; k < M; ++k) sums[k] += lanes[k] * lanes[M];
+    for (int k = 0; k < M; ++k) sums[k] = multiply_add(lanes[k], lanes[M], sums[k]);
   });
   Eigen::Matrix<Real, M, 1> result;
   for (int k = 0; k < M; ++k) result[k] = sum_lanes(sums[k]);
@@ -568,22 +580,28 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     // Pass 2: neighbour data (rows of n), ascending node index (the cells deliver structured grids
     // already sorted; otherwise the positions are sorted by node index first).
     const auto n = count;
-    bool ascending = true;
-    for (std::size_t j = 1; j < n && ascending; ++j) ascending = order[positions[j - 1]] < order[positions[j]];
-    if (!ascending)
-      std::sort(positions, positions + n, [&](Index a, Index b) { return order[a] < order[b]; });
     workspace.indices.resize(n);
     grow(workspace.offsets, 3 * n);
     grow(workspace.inverse_radii, 3 * n);
     Real* offset_rows = workspace.offsets.data();
     Real* inverse_rows = workspace.inverse_radii.data();
-    for (std::size_t j = 0; j < n; ++j) {
-      const Index k = positions[j];
-      workspace.indices[j] = order[k];
-      for (int d = 0; d < 3; ++d) {
-        offset_rows[d * n + j] = x[d] - points[3 * k + d];
-        inverse_rows[d * n + j] = node_inverse_radii[3 * k + d] * inverse_factor;
+    Index* indices = workspace.indices.data();
+    const auto write = [&] {
+      bool ascending = true;
+      for (std::size_t j = 0; j < n; ++j) {
+        const Index k = positions[j];
+        indices[j] = order[k];
+        ascending &= j == 0 || indices[j - 1] < indices[j];
+        for (int d = 0; d < 3; ++d) {
+          offset_rows[d * n + j] = x[d] - points[3 * k + d];
+          inverse_rows[d * n + j] = node_inverse_radii[3 * k + d] * inverse_factor;
+        }
       }
+      return ascending;
+    };
+    if (!write()) {
+      std::sort(positions, positions + n, [&](Index a, Index b) { return order[a] < order[b]; });
+      write();
     }
     // Basis scaling rho_d: the largest support radius among the neighbours.
     // (four independent minima per direction: one serial chain of min would cost its latency per neighbour)
@@ -804,9 +822,21 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   };
   const VectorM r = solve(prepare(unit));
   out.neighbours.assign(workspace.indices.begin(), workspace.indices.end());
+  const Real* columns = basis.data();  // column k at k * n
+  // p_J . r for the neighbours j .. j + lanes - 1 (the same sums for every derivative order)
+  const auto project = [&](Index j, Index lanes, Real4* b) {
+    for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
+    Real4 projected = b[0] * r[0];
+    for (int k = 1; k < M; ++k) projected = multiply_add(b[k], r[k], projected);
+    return projected;
+  };
+  out.phi.resize(n);
   if (derivative_order < 1) {
-    basis_times<M>(basis, r, projection);
-    out.phi = weight(0).cwiseProduct(projection);
+    for (Index j = 0; j < n; j += 4) {
+      const Index lanes = std::min<Index>(4, n - j);
+      Real4 b[M];
+      store4(out.phi.data() + j, load4(weights + j, lanes) * project(j, lanes, b), lanes);
+    }
     out.dphi.resize(3, 0);
     out.ddphi.resize(6, 0);
     return true;
@@ -816,10 +846,9 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   // r_,i = A^-1 (p_,i - A_,i r) and A_,i r = sum_J w_J,i (p_J . r) p_J.
   // Two sweeps over the neighbours, four at a time: the first forms p_J.r, phi and the sums A_,i r,
   // the second p_J.r_,i and phi_,i.
-  out.phi.resize(n);
-  out.dphi.setZero(3, n);
+  if constexpr (Dim == 3) out.dphi.resize(3, n);  // every row written below
+  else out.dphi.setZero(3, n);
   {
-    const Real* columns = basis.data();  // column k at k * n
     Real* q = projection.data();
     Real* phi = out.phi.data();
     Real4 sums[Dim][M];
@@ -827,15 +856,13 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       for (int k = 0; k < M; ++k) sums[i][k] = Real4{0.0, 0.0, 0.0, 0.0};
     auto first_sweep = [&](Index j, Index lanes) {
       Real4 b[M];
-      for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
-      Real4 projected = b[0] * r[0];
-      for (int k = 1; k < M; ++k) projected += b[k] * r[k];
+      const Real4 projected = project(j, lanes, b);
       const Real4 value = load4(weights + j, lanes) * projected;
       store4(q + j, projected, lanes);
       store4(phi + j, value, lanes);
       for (int i = 0; i < Dim; ++i) {
         const Real4 c = load4(weights + (1 + i) * n + j, lanes) * projected;
-        for (int k = 0; k < M; ++k) sums[i][k] += c * b[k];
+        for (int k = 0; k < M; ++k) sums[i][k] = multiply_add(c, b[k], sums[i][k]);
       }
     };
     Index j = 0;
@@ -856,7 +883,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       const Real4 w = load4(weights + j, lanes);
       for (int i = 0; i < Dim; ++i) {
         Real4 t = b[0] * r_first[i][0];
-        for (int k = 1; k < M; ++k) t += b[k] * r_first[i][k];
+        for (int k = 1; k < M; ++k) t = multiply_add(b[k], r_first[i][k], t);
         if (keep) store4(scratch + (1 + i) * n + j, t, lanes);  // p_J . r_,i for the second derivatives
         const Real4 d = load4(weights + (1 + i) * n + j, lanes) * projected + w * t;
         for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[l];
