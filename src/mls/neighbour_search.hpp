@@ -28,26 +28,13 @@ class CellList {
   /// (a superset of the points inside; the caller filters).
   template <class Visitor>
   void for_each_candidate(const Vec3& low, const Vec3& high, Visitor&& visit) const {
-    if (order_.empty()) return;
-    int first[3];
-    int last[3];
-    for (int d = 0; d < 3; ++d) {
-      if (high[d] < origin_[d] || low[d] > top_[d]) return;
-      first[d] = cell_coordinate(low[d], d);
-      last[d] = cell_coordinate(high[d], d);
-    }
-    for (int z = first[2]; z <= last[2]; ++z) {
-      for (int y = first[1]; y <= last[1]; ++y) {
-        const Index row = (static_cast<Index>(z) * counts_[1] + y) * counts_[0];
-        const Index begin = cell_start_[row + first[0]];
-        const Index end = cell_start_[row + last[0] + 1];
-        for (Index k = begin; k < end; ++k) visit(k);
-      }
-    }
+    for_each_candidate_range(low, high, [&](Index begin, Index end) {
+      for (Index k = begin; k < end; ++k) visit(k);
+    });
   }
 
-  /// The same as for_each_candidate, by contiguous ranges: calls visit(begin, end) once per row of
-  /// cells (positions begin..end-1, possibly empty).
+  /// The same by contiguous ranges: calls visit(begin, end) once per row of cells (positions
+  /// begin..end-1, possibly empty).
   template <class Visitor>
   void for_each_candidate_range(const Vec3& low, const Vec3& high, Visitor&& visit) const {
     if (order_.empty()) return;
@@ -69,19 +56,7 @@ class CellList {
   /// Number of points for_each_candidate(low, high, ...) would visit (an upper bound for buffers).
   Index count_candidates(const Vec3& low, const Vec3& high) const {
     Index count = 0;
-    if (order_.empty()) return 0;
-    int first[3];
-    int last[3];
-    for (int d = 0; d < 3; ++d) {
-      if (high[d] < origin_[d] || low[d] > top_[d]) return 0;
-      first[d] = cell_coordinate(low[d], d);
-      last[d] = cell_coordinate(high[d], d);
-    }
-    for (int z = first[2]; z <= last[2]; ++z)
-      for (int y = first[1]; y <= last[1]; ++y) {
-        const Index row = (static_cast<Index>(z) * counts_[1] + y) * counts_[0];
-        count += cell_start_[row + last[0] + 1] - cell_start_[row + first[0]];
-      }
+    for_each_candidate_range(low, high, [&](Index begin, Index end) { count += end - begin; });
     return count;
   }
 
