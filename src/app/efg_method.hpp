@@ -10,7 +10,7 @@
 //     points: nodes                    #   nodes | nodes_and_cell_centres (auxiliary equilibrium points)
 //   basis: quadratic                   # linear | quadratic
 //   weight: quartic_spline             # gauss | cubic_spline | quartic_spline   (gauss_beta: 2.5)
-//   support: {shape: box, kappa: 2.0}  # {shape: sphere, kappa: 2.5} | {nearest: N} | {radius: [rx, ry, rz]}
+//   support: {shape: box, kappa: 2.0}  # {shape: sphere, kappa: 2.5} | {nearest: N, kappa: k} (SELECT) | {radius: [rx, ry, rz]}
 //                                      # | {mode: all|variable, nearest: N, scale: s}  (see mls_options.hpp)
 //                                      # a quadratic basis needs kappa > 2 on a body's faces (2.5 or 3)
 //   singular_remedy: false             # true: grow the support where the moment matrix is singular (SINCHECK)
