@@ -227,6 +227,10 @@ void weighted_gram(const BasisMatrix& basis, const Eigen::Map<const Eigen::Vecto
 
 using Real4 = Real __attribute__((vector_size(32)));  // four doubles (one AVX2 register)
 
+// Builds without AVX (the sanitizer build, -march=x86-64-v2) warn that these file-local helpers return
+// 32-byte vectors by value, an ABI that differs from AVX builds; they are inlined in this file only.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 /// Four consecutive values from p (unaligned).
 inline Real4 load4(const Real* p) {
   Real4 v;
