@@ -255,9 +255,9 @@ inline void store4(Real* p, const Real4& v, Index lanes) {
   for (Index l = 0; l < lanes; ++l) p[l] = v[l];
 }
 
-/// Calls block(offset j, lanes) for j = 0, 4, 8, ... over n entries: full blocks read columns in place,
-/// the last partial block (n % 4 entries) reads zero-padded copies of the `columns` arrays of
-/// column_stride values (so sums over the lanes need no tail loop).
+/// Calls block(lanes) for the entries j .. j + 3 (j = 0, 4, 8, ... < n) of every array in `columns`,
+/// lanes[c] holding array c's four values; in the last partial block (n % 4 entries) the lanes past n
+/// are zero, so sums over the lanes need no tail loop.
 template <int Columns, class Block>
 void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Block&& block) {
   Index j = 0;
