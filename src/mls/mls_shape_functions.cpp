@@ -23,14 +23,12 @@ namespace detail {
 
 /// Per-thread scratch memory; vectors keep their capacity between evaluations.
 struct MlsWorkspace {
-  std::vector<std::pair<Index, Index>> candidates;  // (node index, slot in the unsorted buffers); grow-only
+  std::vector<std::pair<Index, Index>> candidates;  // SELECT: (rank key index, cell-order position); grow-only
   std::vector<std::pair<Real, Index>> nearest;
   std::vector<Index> positions;     // node-centred gather: cell-order positions of the neighbours
   bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
-  std::vector<Real> unsorted_offsets, unsorted_inverse_radii;
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * n): x_d - x_I,d and 1 / R_I,d of the n neighbours
-  // (the unsorted buffers of gather(): one row per direction of the candidate count)
   std::vector<Real> offsets;
   std::vector<Real> inverse_radii;
   std::vector<Real> weights;        // 10 arrays of n: w, w_x, w_y, w_z, w_xx, w_yy, w_zz, w_xy, w_yz, w_zx
@@ -381,6 +379,7 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
   projected_.bottomRows(3 - dimension).setZero();
   const Real widen = 1.0 + support_epsilon;
   Eigen::Matrix3Xd estimate;  // nodal spacing, estimated once
+  bool spacing_units = false;  // metric_ is not 1: an anisotropic lattice
   if (options_.mode == SupportMode::nearest || options_.mode == SupportMode::all ||
       options_.mode == SupportMode::variable) {
     try {
@@ -389,7 +388,7 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
       // all nodes coincide: no spacing, plain distances
     }
     metric_ = spacing_metric(estimate, dimension);
-    spacing_units_ = (metric_.head(dimension).array() != 1.0).any();
+    spacing_units = (metric_.head(dimension).array() != 1.0).any();
   }
 
   switch (options_.mode) {
@@ -412,7 +411,7 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
           radii_.col(i).head(dimension) = widen * (options_.kappa_axes.head(dimension).array() + options_.delta).matrix().cwiseProduct(spacing_.col(i).head(dimension));
         } else if (options_.shape == SupportShape::box) {
           radii_.col(i).head(dimension) = (options_.kappa + options_.delta) * widen * spacing_.col(i).head(dimension);
-        } else if (options_.mode == SupportMode::nearest && spacing_units_) {
+        } else if (options_.mode == SupportMode::nearest && spacing_units) {
           // SELECT on an anisotropic lattice: a sphere in units of the node's spacing per axis, as the
           // nearest are counted (an ellipsoid of radii kappa h_I,d)
           radii_.col(i).head(dimension) = options_.kappa * widen * spacing_.col(i).head(dimension);
@@ -497,28 +496,6 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   const Index* order = cells_.order().data();
   const Real inverse_factor = 1.0 / radius_factor;
   std::size_t count = 0;
-  std::pair<Index, Index>* candidates = nullptr;
-  // candidate slot c, direction d at [d * stride + c] (structure of arrays)
-  std::size_t stride = 0;
-  Real* offsets = nullptr;
-  Real* inverse_radii = nullptr;
-  auto reserve = [&](Index capacity) {
-    stride = static_cast<std::size_t>(capacity);
-    grow(workspace.candidates, stride);
-    grow(workspace.unsorted_offsets, 3 * stride);
-    grow(workspace.unsorted_inverse_radii, 3 * stride);
-    candidates = workspace.candidates.data();
-    offsets = workspace.unsorted_offsets.data();
-    inverse_radii = workspace.unsorted_inverse_radii.data();
-  };
-  auto accept = [&](Index index, const Real* offset, const Real* inverse) {
-    candidates[count] = {index, static_cast<Index>(count)};
-    for (int d = 0; d < 3; ++d) {
-      offsets[d * stride + count] = offset[d];
-      inverse_radii[d * stride + count] = inverse[d];
-    }
-    ++count;
-  };
 
   if (node_centred()) {
     // Pass 1 keeps the cell-order positions of the nodes whose supports cover x (one store per
@@ -635,49 +612,31 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     const Real inverse = 1.0 / point_radius;
     Real inverses[3] = {0.0, 0.0, 0.0};
     for (int d = 0; d < Dim; ++d) inverses[d] = metric_[d] * inverse;
-    auto consider = [&](Index index) {
-      const Real offset[3] = {x[0] - projected_(0, index), x[1] - projected_(1, index), x[2] - projected_(2, index)};
-      if (box) {
-        for (int d = 0; d < Dim; ++d)
-          if (!(std::abs(offset[d]) * inverses[d] < 1.0)) return;
-      } else {
-        Real squared = 0.0;
-        for (int d = 0; d < Dim; ++d) squared += (offset[d] * inverses[d]) * (offset[d] * inverses[d]);
-        if (!(squared < 1.0)) return;
+    // the N nearest inside that support (all of them for scale >= 1), in ascending node index
+    IndexList& indices = workspace.indices;
+    indices.clear();
+    for (const auto& [distance_squared, index] : workspace.nearest) {
+      bool inside = true;
+      Real squared = 0.0;
+      for (int d = 0; d < Dim; ++d) {
+        const Real scaled = (x[d] - projected_(d, index)) * inverses[d];
+        inside &= std::abs(scaled) < 1.0;
+        squared += scaled * scaled;
       }
-      accept(index, offset, inverses);
-    };
-    reserve(static_cast<Index>(workspace.nearest.size()));
-    for (const auto& [distance_squared, index] : workspace.nearest) consider(index);
-    for (int d = 0; d < 3; ++d) rho[d] = d < Dim ? point_radius / metric_[d] : 1.0;
-  }
-  for (int d = 0; d < 3; ++d)
-    if (!(rho[d] > 0.0) || !std::isfinite(rho[d])) rho[d] = 1.0;
-
-  // Neighbours in ascending index order (the cells deliver structured grids already sorted).
-  const auto n = count;
-  // rows of n (structure of arrays)
-  workspace.indices.resize(n);
-  grow(workspace.offsets, 3 * n);
-  grow(workspace.inverse_radii, 3 * n);
-  if (std::is_sorted(candidates, candidates + n)) {
-    for (std::size_t j = 0; j < n; ++j) workspace.indices[j] = candidates[j].first;
-    for (int d = 0; d < 3; ++d) {
-      std::copy_n(offsets + d * stride, n, workspace.offsets.data() + d * n);
-      std::copy_n(inverse_radii + d * stride, n, workspace.inverse_radii.data() + d * n);
+      if (box ? inside : squared < 1.0) indices.push_back(index);
     }
-  } else {
-    std::sort(candidates, candidates + n);
-    for (std::size_t j = 0; j < n; ++j) {
-      const auto [index, slot] = candidates[j];
-      workspace.indices[j] = index;
+    std::sort(indices.begin(), indices.end());
+    const std::size_t n = indices.size();
+    grow(workspace.offsets, 3 * n);
+    grow(workspace.inverse_radii, 3 * n);
+    for (std::size_t j = 0; j < n; ++j)
       for (int d = 0; d < 3; ++d) {
-        workspace.offsets[d * n + j] = offsets[d * stride + static_cast<std::size_t>(slot)];
-        workspace.inverse_radii[d * n + j] = inverse_radii[d * stride + static_cast<std::size_t>(slot)];
+        workspace.offsets[d * n + j] = x[d] - projected_(d, indices[j]);
+        workspace.inverse_radii[d * n + j] = inverses[d];
       }
-    }
+    for (int d = 0; d < 3; ++d) rho[d] = d < Dim ? point_radius / metric_[d] : 1.0;
+    return static_cast<Index>(n);
   }
-  return static_cast<Index>(n);
 }
 
 template <int Dim, Basis B, bool Enriched>

@@ -124,7 +124,6 @@ class MlsShapeFunctions {
   /// support radius are measured in these units (a regular lattice of any aspect is then a unit cube
   /// lattice). Zero on unused axes; unused in the node-centred modes.
   Vec3 metric_ = Vec3::Ones();
-  bool spacing_units_ = false;    // metric_ is not 1 (an anisotropic lattice)
   PointMatrix metric_points_;     // point-centred modes: metric_ * projected_ (the cell list's points)
   CellList cells_;
 };
