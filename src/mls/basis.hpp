@@ -46,9 +46,11 @@ struct PolynomialBasis {
     return result;
   }
 
-  /// Writes p(z) to out[0..size).
-  static void values(const Real* z, Real* out) {
-    out[0] = 1.0;
+  /// Writes p(z) to out[0..size). T: Real, or a vector of Reals (GCC vector extension) for several
+  /// points at once.
+  template <class T>
+  static void values(const T* z, T* out) {
+    out[0] = T{} + 1.0;
     for (int d = 0; d < Dim; ++d) out[1 + d] = z[d];
     if constexpr (B == Basis::quadratic) {
       for (int d = 0; d < Dim; ++d) out[1 + Dim + d] = z[d] * z[d];

@@ -11,10 +11,12 @@
 
 #include <fmt/format.h>
 
+
 #include "core/error.hpp"
 #include "mls/basis.hpp"
 #include "mls/moment_matrix.hpp"
 #include "mls/nodal_spacing.hpp"
+#include "mls/real4.hpp"
 #include "mls/weight_function.hpp"
 
 namespace lamina::mls {
@@ -28,9 +30,10 @@ struct MlsWorkspace {
   std::vector<Index> positions;     // node-centred gather: cell-order positions of the neighbours
   bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
   IndexList indices;                // neighbours, ascending
-  // structure of arrays, n per row (row d at d * n): x_d - x_I,d and 1 / R_I,d of the n neighbours
+  // structure of arrays, n per row (row d at d * stride): x_d - x_I,d and 1 / R_I,d of the n neighbours
   std::vector<Real> offsets;
   std::vector<Real> inverse_radii;
+  std::size_t stride = 0;
   std::vector<Real> weights;        // 10 arrays of n: w, w_x, w_y, w_z, w_xx, w_yy, w_zz, w_xy, w_yz, w_zx
   std::vector<Real> basis;          // n x m, column k = basis term k at the neighbours
   std::vector<Real> scratch;        // n x max(9, m): weight factors; p_I.r, p_I.r_,i, combined terms, weighted column / n x m
@@ -39,6 +42,7 @@ struct MlsWorkspace {
 }  // namespace detail
 
 namespace {
+using namespace simd;  // Real4 and its helpers (mls/real4.hpp)
 
 /// Above this condition estimate the shape functions are computed in a weighted-orthonormal basis,
 /// orthonormalised twice (Cholesky-QR2). With A^-1 applied directly, rounding in A leaves the
@@ -81,12 +85,13 @@ void grow(Vector& vector, std::size_t size) {
 
 /// Box supports: per direction d the factors w(s_d), w'(s_d) sign(dx_d) / R_d, w''(s_d) / R_d^2 into
 /// `factors` (9 rows of n), then their products; both passes are plain loops over j that vectorise.
+
 template <int Dim, Weight Kind, bool Second>
-void compute_box_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
+void compute_box_weights(const WeightFunction& function, std::size_t n, std::size_t stride, const Real* offsets, const Real* inverse_radii,
                          Real* factors, Real* weights) {
   for (int d = 0; d < Dim; ++d) {
-    const Real* offset = offsets + d * n;
-    const Real* inverse = inverse_radii + d * n;
+    const Real* offset = offsets + d * stride;
+    const Real* inverse = inverse_radii + d * stride;
     Real* value = factors + (3 * d) * n;
     Real* first = factors + (3 * d + 1) * n;
     Real* second = factors + (3 * d + 2) * n;
@@ -120,7 +125,17 @@ void compute_box_weights(const WeightFunction& function, std::size_t n, const Re
     const Real *v0 = row(0, 0), *v1 = row(1, 0), *v2 = row(2, 0);
     const Real *f0 = row(0, 1), *f1 = row(1, 1), *f2 = row(2, 1);
     const Real *s0 = row(0, 2), *s1 = row(1, 2), *s2 = row(2, 2);
-    for (std::size_t j = 0; j < n; ++j) {
+    std::size_t j = 0;
+    if constexpr (!Second)
+      for (; j + 4 <= n; j += 4) {  // four at a time (the factor rows and the weights do not overlap)
+        const Real4 a = load4(v0 + j), b = load4(v1 + j), c = load4(v2 + j);
+        const Real4 ab = a * b;  // the same products, in the same order, as the loop below
+        store4(weights + j, ab * c, 4);
+        store4(weights + n + j, load4(f0 + j) * b * c, 4);
+        store4(weights + 2 * n + j, a * load4(f1 + j) * c, 4);
+        store4(weights + 3 * n + j, ab * load4(f2 + j), 4);
+      }
+    for (; j < n; ++j) {
       weights[j] = v0[j] * v1[j] * v2[j];
       weights[n + j] = f0[j] * v1[j] * v2[j];
       weights[2 * n + j] = v0[j] * f1[j] * v2[j];
@@ -139,14 +154,14 @@ void compute_box_weights(const WeightFunction& function, std::size_t n, const Re
 
 /// Spherical supports (see compute_weights).
 template <int Dim, Weight Kind, bool Second>
-void compute_sphere_weights(const WeightFunction& function, std::size_t n, const Real* offsets,
+void compute_sphere_weights(const WeightFunction& function, std::size_t n, std::size_t stride, const Real* offsets,
                             const Real* inverse_radii, Real* weights) {
   for (std::size_t j = 0; j < n; ++j) {
     // u_d = dx_d / R_d (R_d equal on every axis for a sphere, unequal for an ellipsoid), s = |u|
     Real scaled[3], inverse[3];
     for (int d = 0; d < Dim; ++d) {
-      inverse[d] = inverse_radii[d * n + j];
-      scaled[d] = offsets[d * n + j] * inverse[d];
+      inverse[d] = inverse_radii[d * stride + j];
+      scaled[d] = offsets[d * stride + j] * inverse[d];
     }
     Real squared = 0.0;
     for (int d = 0; d < Dim; ++d) squared += scaled[d] * scaled[d];
@@ -178,36 +193,36 @@ void compute_sphere_weights(const WeightFunction& function, std::size_t n, const
 /// weights[q * n + j] for q = 0 (w), 1..3 (w_,i), 4..9 (w_,ij in xx yy zz xy yz zx; only if Second).
 /// Box: w = prod_d w(s_d), s_d = |dx_d| / R_d. Sphere: s = |dx| / R, w_,i = (w'/s) dx_i / R^2,
 /// w_,ij = (w'/s) delta_ij / R^2 + (w'' - w'/s) (dx_i / r)(dx_j / r) / R^2.
-/// offsets, inverse_radii: 3 rows of n (structure of arrays); factors: 9 n scratch values.
+/// offsets, inverse_radii: 3 rows of n at `stride` (structure of arrays); factors: 9 n scratch values.
 template <int Dim, bool Box, Weight Kind, bool Second>
-void compute_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
+void compute_weights(const WeightFunction& function, std::size_t n, std::size_t stride, const Real* offsets, const Real* inverse_radii,
                      Real* factors, Real* weights) {
-  if constexpr (Box) compute_box_weights<Dim, Kind, Second>(function, n, offsets, inverse_radii, factors, weights);
-  else compute_sphere_weights<Dim, Kind, Second>(function, n, offsets, inverse_radii, weights);
+  if constexpr (Box) compute_box_weights<Dim, Kind, Second>(function, n, stride, offsets, inverse_radii, factors, weights);
+  else compute_sphere_weights<Dim, Kind, Second>(function, n, stride, offsets, inverse_radii, weights);
 }
 
 template <int Dim, bool Box, bool Second>
-void compute_weights(const WeightFunction& function, std::size_t n, const Real* offsets, const Real* inverse_radii,
+void compute_weights(const WeightFunction& function, std::size_t n, std::size_t stride, const Real* offsets, const Real* inverse_radii,
                      Real* factors, Real* weights) {
   switch (function.kind()) {
     case Weight::gauss:
-      return compute_weights<Dim, Box, Weight::gauss, Second>(function, n, offsets, inverse_radii, factors, weights);
+      return compute_weights<Dim, Box, Weight::gauss, Second>(function, n, stride, offsets, inverse_radii, factors, weights);
     case Weight::cubic_spline:
-      return compute_weights<Dim, Box, Weight::cubic_spline, Second>(function, n, offsets, inverse_radii, factors, weights);
+      return compute_weights<Dim, Box, Weight::cubic_spline, Second>(function, n, stride, offsets, inverse_radii, factors, weights);
     case Weight::quartic_spline:
-      return compute_weights<Dim, Box, Weight::quartic_spline, Second>(function, n, offsets, inverse_radii, factors, weights);
+      return compute_weights<Dim, Box, Weight::quartic_spline, Second>(function, n, stride, offsets, inverse_radii, factors, weights);
   }
 }
 
 template <int Dim>
-void compute_weights(const WeightFunction& function, bool box, bool second, std::size_t n, const Real* offsets,
+void compute_weights(const WeightFunction& function, bool box, bool second, std::size_t n, std::size_t stride, const Real* offsets,
                      const Real* inverse_radii, Real* factors, Real* weights) {
   if (box) {
-    if (second) compute_weights<Dim, true, true>(function, n, offsets, inverse_radii, factors, weights);
-    else compute_weights<Dim, true, false>(function, n, offsets, inverse_radii, factors, weights);
+    if (second) compute_weights<Dim, true, true>(function, n, stride, offsets, inverse_radii, factors, weights);
+    else compute_weights<Dim, true, false>(function, n, stride, offsets, inverse_radii, factors, weights);
   } else {
-    if (second) compute_weights<Dim, false, true>(function, n, offsets, inverse_radii, factors, weights);
-    else compute_weights<Dim, false, false>(function, n, offsets, inverse_radii, factors, weights);
+    if (second) compute_weights<Dim, false, true>(function, n, stride, offsets, inverse_radii, factors, weights);
+    else compute_weights<Dim, false, false>(function, n, stride, offsets, inverse_radii, factors, weights);
   }
 }
 
@@ -223,72 +238,6 @@ void weighted_gram(const BasisMatrix& basis, const Eigen::Map<const Eigen::Vecto
   }
 }
 
-using Real4 = Real __attribute__((vector_size(32)));  // four doubles (one AVX2 register)
-
-// Builds without AVX (the sanitizer build, -march=x86-64-v2) warn that these file-local helpers return
-// 32-byte vectors by value, an ABI that differs from AVX builds; they are inlined in this file only.
-#pragma GCC diagnostic ignored "-Wpsabi"
-
-/// Four consecutive values from p (unaligned).
-inline Real4 load4(const Real* p) {
-  Real4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-/// The first `lanes` (1..4) values from p, the other lanes zero.
-inline Real4 load4(const Real* p, Index lanes) {
-  if (lanes == 4) return load4(p);
-  Real4 v = {0.0, 0.0, 0.0, 0.0};
-  for (Index l = 0; l < lanes; ++l) v[l] = p[l];
-  return v;
-}
-
-/// Stores the first `lanes` (1..4) values of v at p.
-inline void store4(Real* p, const Real4& v, Index lanes) {
-  if (lanes == 4) {
-    std::memcpy(p, &v, sizeof v);
-    return;
-  }
-  for (Index l = 0; l < lanes; ++l) p[l] = v[l];
-}
-
-/// Calls block(lanes) for the entries j .. j + 3 (j = 0, 4, 8, ... < n) of every array in `columns`,
-/// lanes[c] holding array c's four values; in the last partial block (n % 4 entries) the lanes past n
-/// are zero, so sums over the lanes need no tail loop.
-template <int Columns, class Block>
-void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Block&& block) {
-  Index j = 0;
-  for (; j + 4 <= n; j += 4) {
-    Real4 lanes[Columns];
-    for (int c = 0; c < Columns; ++c) lanes[c] = load4(columns[c] + j);
-    block(lanes);
-  }
-  if (j < n) {
-    Real4 lanes[Columns];
-    for (int c = 0; c < Columns; ++c) {
-      lanes[c] = Real4{0.0, 0.0, 0.0, 0.0};
-      for (Index l = 0; j + l < n; ++l) lanes[c][l] = columns[c][j + l];
-    }
-    block(lanes);
-  }
-}
-
-inline Real sum_lanes(const Real4& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
-
-/// a * b + c, fused where the CPU has FMA (x86-64-v3). The build turns off the compiler's own
-/// contraction (CMakeLists.txt: it changed an MPM case's rounding-sensitive path); these sums of
-/// products are only rounded better by it.
-inline Real4 multiply_add(const Real4& a, const Real4& b, const Real4& c) {
-#ifdef __FMA__
-  return __builtin_ia32_vfmaddpd256(a, b, c);
-#else
-  return a * b + c;
-#endif
-}
-inline Real4 multiply_add(const Real4& a, Real b, const Real4& c) { return multiply_add(a, Real4{b, b, b, b}, c); }
-
-using Mask4 = std::int64_t __attribute__((vector_size(32)));  // lane masks of Real4 comparisons (0 / -1)
 
 /// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), in one
 /// pass over the neighbours, four at a time (one accumulator per moment).
@@ -498,42 +447,67 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   std::size_t count = 0;
 
   if (node_centred()) {
-    // Pass 1 keeps the cell-order positions of the nodes whose supports cover x (one store per
-    // candidate, about half are rejected); pass 2 writes the kept ones' data in neighbour order.
+    // Pass 1 tests the candidates four at a time along each row of cells (lanes past the row's end are
+    // masked off) and keeps the cell-order positions of the nodes whose supports cover x (about half of
+    // the candidates). With AVX2 it also keeps their offsets x - x_I and inverse radii, packed by a lane
+    // permutation into rows of `stride`; otherwise pass 2 writes them from the positions.
     const Vec3 reach = max_radius_ * radius_factor;
     const Vec3 low = x - reach, high = x + reach;
-    grow(workspace.positions, static_cast<std::size_t>(cells_.count_candidates(low, high) + 1));
+    const auto stride = static_cast<std::size_t>(cells_.candidate_bound(low, high) + 4);
+    grow(workspace.positions, stride);
+    grow(workspace.offsets, 3 * stride);
+    grow(workspace.inverse_radii, 3 * stride);
     Index* positions = workspace.positions.data();
+    Real* offset_rows = workspace.offsets.data();
+    Real* inverse_rows = workspace.inverse_radii.data();
     const Real* points = sorted.data();
     const Real* node_inverse_radii = sorted_inverse_radii_.data();
-    // Four nodes at a time along each row of cells (lanes past the row's end are masked off).
     const Real* rows[6];
     for (int r = 0; r < 6; ++r) rows[r] = sorted_rows_.data() + static_cast<std::size_t>(r) * row_stride_;
     const Real4 lane_index = {0.0, 1.0, 2.0, 3.0};
     cells_.for_each_candidate_range(low, high, [&](Index begin, Index end) {
       for (Index k = begin; k < end; k += 4) {
         Mask4 inside = lane_index < static_cast<Real>(end - k);
+        Real4 offset[3], inverse[3];
+        for (int d = 0; d < 3; ++d) {
+          offset[d] = x[d] - load4(rows[d] + k);
+          inverse[d] = load4(rows[3 + d] + k) * inverse_factor;
+        }
         if (box) {
-          for (int d = 0; d < Dim; ++d) {
-            const Real4 offset = x[d] - load4(rows[d] + k);
-            const Real4 magnitude = offset < 0.0 ? -offset : offset;
-            inside &= magnitude * (load4(rows[3 + d] + k) * inverse_factor) < 1.0;
-          }
+          for (int d = 0; d < Dim; ++d) inside &= (offset[d] < 0.0 ? -offset[d] : offset[d]) * inverse[d] < 1.0;
         } else {
           // a sphere, or an ellipsoid of per-axis radii (mode all on an anisotropic lattice)
           Real4 squared = {0.0, 0.0, 0.0, 0.0};
           for (int d = 0; d < Dim; ++d) {
-            const Real4 scaled = (x[d] - load4(rows[d] + k)) * (load4(rows[3 + d] + k) * inverse_factor);
+            const Real4 scaled = offset[d] * inverse[d];
             squared += scaled * scaled;
           }
           inside &= squared < 1.0;
         }
+#ifdef __AVX2__
+        const int kept = _mm256_movemask_pd(reinterpret_cast<__m256d>(inside));
+        const __m256i permutation = _mm256_load_si256(&compress_lanes[kept]);
+        for (int d = 0; d < 3; ++d) {
+          _mm256_storeu_pd(offset_rows + d * stride + count, compress(offset[d], permutation));
+          _mm256_storeu_pd(inverse_rows + d * stride + count, compress(inverse[d], permutation));
+        }
+        const __m256i position = _mm256_add_epi64(_mm256_set1_epi64x(k), _mm256_setr_epi64x(0, 1, 2, 3));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(positions + count),
+                            _mm256_permutevar8x32_epi32(position, permutation));
+        count += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(kept)));
+#else
         for (int l = 0; l < 4; ++l) {
           positions[count] = k + l;  // branch-free: kept only if inside
           count += static_cast<std::size_t>(inside[l] & 1);
         }
+#endif
       }
     });
+#ifdef __AVX2__
+    bool packed = true;  // the neighbours' offsets and inverse radii are in rows of `stride`
+#else
+    bool packed = false;
+#endif
     // SELECT: of the nodes whose supports cover x, the N nearest (spacing units, ties by node index).
     workspace.capped = options_.mode == SupportMode::nearest && count > static_cast<std::size_t>(nearest_count);
     if (workspace.capped) {
@@ -557,42 +531,46 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
                        [&](const auto& a, const auto& b) { return ranked[a.first] < ranked[b.first]; });
       count = static_cast<std::size_t>(nearest_count);
       for (std::size_t c = 0; c < count; ++c) positions[c] = slots[c].second;
+      packed = false;
     }
-    // Pass 2: neighbour data (rows of n), ascending node index (the cells deliver structured grids
-    // already sorted; otherwise the positions are sorted by node index first).
+    // Pass 2: neighbour data in rows of n, ascending node index (the cells deliver structured grids
+    // already sorted; otherwise the positions are sorted by node index and the data written from them).
     const auto n = count;
     workspace.indices.resize(n);
-    grow(workspace.offsets, 3 * n);
-    grow(workspace.inverse_radii, 3 * n);
-    Real* offset_rows = workspace.offsets.data();
-    Real* inverse_rows = workspace.inverse_radii.data();
     Index* indices = workspace.indices.data();
+    bool ascending = true;
+    for (std::size_t j = 0; j < n; ++j) {
+      indices[j] = order[positions[j]];
+      ascending &= j == 0 || indices[j - 1] < indices[j];
+    }
     const auto write = [&] {
-      bool ascending = true;
       for (std::size_t j = 0; j < n; ++j) {
         const Index k = positions[j];
         indices[j] = order[k];
-        ascending &= j == 0 || indices[j - 1] < indices[j];
         for (int d = 0; d < 3; ++d) {
           offset_rows[d * n + j] = x[d] - points[3 * k + d];
           inverse_rows[d * n + j] = node_inverse_radii[3 * k + d] * inverse_factor;
         }
       }
-      return ascending;
     };
-    if (!write()) {
+    if (!ascending) {
       std::sort(positions, positions + n, [&](Index a, Index b) { return order[a] < order[b]; });
       write();
+    } else if (!packed) {
+      write();
     }
+    workspace.stride = ascending && packed ? stride : n;
     // Basis scaling rho_d: the largest support radius among the neighbours.
     // (four independent minima per direction: one serial chain of min would cost its latency per neighbour)
+    constexpr Real infinity = std::numeric_limits<Real>::infinity();
     for (int d = 0; d < 3; ++d) {
-      Real smallest[4];
-      std::fill_n(smallest, 4, std::numeric_limits<Real>::infinity());
-      const Real* inverse = inverse_rows + d * n;
+      Real4 smallest = {infinity, infinity, infinity, infinity};
+      const Real* inverse = inverse_rows + d * workspace.stride;
       std::size_t j = 0;
-      for (; j + 4 <= n; j += 4)
-        for (int l = 0; l < 4; ++l) smallest[l] = std::min(smallest[l], inverse[j + static_cast<std::size_t>(l)]);
+      for (; j + 4 <= n; j += 4) {
+        const Real4 value = load4(inverse + j);
+        smallest = value < smallest ? value : smallest;
+      }
       for (; j < n; ++j) smallest[0] = std::min(smallest[0], inverse[j]);
       rho[d] = 1.0 / std::min(std::min(smallest[0], smallest[1]), std::min(smallest[2], smallest[3]));
       if (!(rho[d] > 0.0) || !std::isfinite(rho[d])) rho[d] = 1.0;
@@ -629,6 +607,7 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     const std::size_t n = indices.size();
     grow(workspace.offsets, 3 * n);
     grow(workspace.inverse_radii, 3 * n);
+    workspace.stride = n;
     for (std::size_t j = 0; j < n; ++j)
       for (int d = 0; d < 3; ++d) {
         workspace.offsets[d * n + j] = x[d] - projected_(d, indices[j]);
@@ -691,18 +670,19 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       grow(workspace.weights, 10 * count);
       grow(workspace.basis, M * count);
       grow(workspace.scratch, std::max(9, M) * count);
-      compute_weights<Dim>(function, box, derivative_order >= 2, count, workspace.offsets.data(),
+      compute_weights<Dim>(function, box, derivative_order >= 2, count, workspace.stride, workspace.offsets.data(),
                            workspace.inverse_radii.data(), workspace.scratch.data(), workspace.weights.data());
       BasisMap basis(workspace.basis.data(), n, M);
       Real inverse_rho[3];
       for (int d = 0; d < Dim; ++d) inverse_rho[d] = -1.0 / rho[d];
       const Real* offsets = workspace.offsets.data();
       Real* columns = workspace.basis.data();  // column k at k * n: vectorised over the neighbours j
-      for (Index j = 0; j < n; ++j) {
-        Real z[3], p[P];
-        for (int d = 0; d < Dim; ++d) z[d] = offsets[d * n + j] * inverse_rho[d];
+      for (Index j = 0; j < n; j += 4) {  // four neighbours at a time
+        const Index lanes = std::min<Index>(4, n - j);
+        Real4 z[3], p[P];
+        for (int d = 0; d < Dim; ++d) z[d] = load4(offsets + d * workspace.stride + j, lanes) * inverse_rho[d];
         Polynomial::values(z, p);
-        for (int k = 0; k < P; ++k) columns[k * n + j] = p[k];
+        for (int k = 0; k < P; ++k) store4(columns + k * n + j, p[k], lanes);
       }
       if constexpr (Enriched)
         for (Index j = 0; j < n; ++j)
@@ -844,13 +824,15 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
       const Real4 projected = load4(q + j, lanes);
       const Real4 w = load4(weights + j, lanes);
+      Real4 d[Dim];
       for (int i = 0; i < Dim; ++i) {
         Real4 t = b[0] * r_first[i][0];
         for (int k = 1; k < M; ++k) t = multiply_add(b[k], r_first[i][k], t);
         if (keep) store4(scratch + (1 + i) * n + j, t, lanes);  // p_J . r_,i for the second derivatives
-        const Real4 d = load4(weights + (1 + i) * n + j, lanes) * projected + w * t;
-        for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[l];
+        d[i] = load4(weights + (1 + i) * n + j, lanes) * projected + w * t;
       }
+      for (int i = 0; i < Dim; ++i)
+        for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[i][l];
     };
     for (j = 0; j + 4 <= n; j += 4) second_sweep(j, 4);
     if (j < n) second_sweep(j, n - j);

@@ -25,7 +25,7 @@ class MomentMatrixFactor {
   /// ill-conditioned: a non-positive diagonal, a pivot of the scaled matrix below 1 / max_condition
   /// (then cond_2 >= 1 / pivot > max_condition for certain), or an estimate above max_condition.
   /// The pivots are those of the Cholesky factorisation (the diagonals of the Schur complements).
-  bool factor(const Matrix& a, Real max_condition) {
+  [[gnu::noinline]] bool factor(const Matrix& a, Real max_condition) {
     condition_ = std::numeric_limits<Real>::infinity();
     has_transform_ = false;
     // S as vectors of four (vector square roots and divisions; padding lanes 1).

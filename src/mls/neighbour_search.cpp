@@ -35,6 +35,7 @@ CellList::CellList(const PointMatrix& points, Real cell_size) {
     cell_of[i] = cell;
     ++cell_start_[cell + 1];
   }
+  for (Index c = 0; c < cells; ++c) max_per_cell_ = std::max(max_per_cell_, cell_start_[c + 1]);
   for (Index c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
   order_.resize(count);
   std::vector<Index> fill(cell_start_.begin(), cell_start_.end() - 1);

@@ -1,6 +1,7 @@
 #pragma once
 // Uniform-bin cell list over a point set for box/sphere range queries and k-nearest queries; used to
 // find the nodes whose supports contain an evaluation point (the MLS neighbours of seed 004).
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -54,6 +55,17 @@ class CellList {
   }
 
   /// Number of points for_each_candidate(low, high, ...) would visit (an upper bound for buffers).
+  /// An upper bound of count_candidates() from the number of cells the box overlaps (no walk over them).
+  Index candidate_bound(const Vec3& low, const Vec3& high) const {
+    if (order_.empty()) return 0;
+    Index cells = 1;
+    for (int d = 0; d < 3; ++d) {
+      if (high[d] < origin_[d] || low[d] > top_[d]) return 0;
+      cells *= cell_coordinate(high[d], d) - cell_coordinate(low[d], d) + 1;
+    }
+    return std::min(size(), cells * max_per_cell_);
+  }
+
   Index count_candidates(const Vec3& low, const Vec3& high) const {
     Index count = 0;
     for_each_candidate_range(low, high, [&](Index begin, Index end) { count += end - begin; });
@@ -82,6 +94,7 @@ class CellList {
   Vec3 origin_ = Vec3::Zero();
   Vec3 top_ = Vec3::Zero();
   int counts_[3] = {1, 1, 1};
+  Index max_per_cell_ = 0;  // the most points in one cell
   std::vector<Index> cell_start_;  // cells + 1 offsets into order_
   std::vector<Index> order_;
   PointMatrix sorted_points_;

@@ -1,0 +1,112 @@
+#pragma once
+// Four doubles in one AVX2 register (GCC vector extension) and the few operations the MLS kernels use
+// on them: loads and stores of partial blocks, fused multiply-add, lane sums and lane compression.
+#include <cstdint>
+#include <cstring>
+
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
+#include "core/types.hpp"
+
+namespace lamina::mls::simd {
+
+using Real4 = Real __attribute__((vector_size(32)));  // four doubles (one AVX2 register)
+
+// Builds without AVX (the sanitizer build, -march=x86-64-v2) warn that these helpers return 32-byte
+// vectors by value, an ABI that differs from AVX builds; they are inline, for the MLS kernels only.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+/// Four consecutive values from p (unaligned).
+inline Real4 load4(const Real* p) {
+  Real4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+/// The first `lanes` (1..4) values from p, the other lanes zero.
+inline Real4 load4(const Real* p, Index lanes) {
+  if (lanes == 4) return load4(p);
+  Real4 v = {0.0, 0.0, 0.0, 0.0};
+  for (Index l = 0; l < lanes; ++l) v[l] = p[l];
+  return v;
+}
+
+/// Stores the first `lanes` (1..4) values of v at p.
+inline void store4(Real* p, const Real4& v, Index lanes) {
+  if (lanes == 4) {
+    std::memcpy(p, &v, sizeof v);
+    return;
+  }
+  for (Index l = 0; l < lanes; ++l) p[l] = v[l];
+}
+
+/// Calls block(lanes) for the entries j .. j + 3 (j = 0, 4, 8, ... < n) of every array in `columns`,
+/// lanes[c] holding array c's four values; in the last partial block (n % 4 entries) the lanes past n
+/// are zero, so sums over the lanes need no tail loop.
+template <int Columns, class Block>
+void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Block&& block) {
+  Index j = 0;
+  for (; j + 4 <= n; j += 4) {
+    Real4 lanes[Columns];
+    for (int c = 0; c < Columns; ++c) lanes[c] = load4(columns[c] + j);
+    block(lanes);
+  }
+  if (j < n) {
+    Real4 lanes[Columns];
+    for (int c = 0; c < Columns; ++c) {
+      lanes[c] = Real4{0.0, 0.0, 0.0, 0.0};
+      for (Index l = 0; j + l < n; ++l) lanes[c][l] = columns[c][j + l];
+    }
+    block(lanes);
+  }
+}
+
+inline Real sum_lanes(const Real4& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
+/// a * b + c, fused where the CPU has FMA (x86-64-v3). The build turns off the compiler's own
+/// contraction (CMakeLists.txt: it changed an MPM case's rounding-sensitive path); these sums of
+/// products are only rounded better by it.
+inline Real4 multiply_add(const Real4& a, const Real4& b, const Real4& c) {
+#ifdef __FMA__
+  return __builtin_ia32_vfmaddpd256(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+inline Real4 multiply_add(const Real4& a, Real b, const Real4& c) { return multiply_add(a, Real4{b, b, b, b}, c); }
+
+using Mask4 = std::int64_t __attribute__((vector_size(32)));  // lane masks of Real4 comparisons (0 / -1)
+
+#ifdef __AVX2__
+/// Lane permutations that move the kept lanes of a four-double vector (a 4-bit mask) to its front, in
+/// order, as indices of 32-bit halves for _mm256_permutevar8x32_epi32 (the other lanes: don't care).
+struct CompressLanes {
+  alignas(32) std::int32_t index[16][8];
+  constexpr CompressLanes() : index{} {
+    for (int mask = 0; mask < 16; ++mask) {
+      int out = 0;
+      for (int lane = 0; lane < 4; ++lane)
+        if (mask & (1 << lane)) {
+          index[mask][2 * out] = 2 * lane;
+          index[mask][2 * out + 1] = 2 * lane + 1;
+          ++out;
+        }
+      for (; out < 4; ++out) {
+        index[mask][2 * out] = 0;
+        index[mask][2 * out + 1] = 1;
+      }
+    }
+  }
+};
+constexpr CompressLanes compress_lanes_table{};
+const __m256i* const compress_lanes = reinterpret_cast<const __m256i*>(compress_lanes_table.index);
+
+/// The lanes of v picked by a compress_lanes permutation.
+inline __m256d compress(const Real4& v, __m256i permutation) {
+  return _mm256_castsi256_pd(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(reinterpret_cast<const __m256d&>(v)), permutation));
+}
+#endif
+
+}  // namespace lamina::mls::simd
