@@ -209,6 +209,7 @@ def main():
     parser.add_argument("--quick", action="store_true", help="21x21x5 instead of 41x41x5 for part 1")
     parser.add_argument("--large", type=int, nargs="*", default=[], metavar="N",
                         help="part 3: N x N x 5 nodes, box kappa 2, with CHOLMOD and with CG (hypre, GAMG)")
+    parser.add_argument("--solvers", default="cholmod,cg_hypre,cg_gamg", help="part 3's solvers (comma-separated)")
     parser.add_argument("--skip-parts", default="", help="comma-separated parts not to run (1, 2)")
     args = parser.parse_args()
     skip = {part.strip() for part in args.skip_parts.split(",") if part.strip()}
@@ -255,6 +256,8 @@ def large_part(args, workdir):
     for n in args.large:
         print(f"3. lamina EFG, R1a at {n}x{n}x5 nodes, box kappa 2.0, {args.threads} thread(s)", flush=True)
         for name, solver in solvers:
+            if name not in args.solvers.split(","):
+                continue
             try:
                 r = run_lamina(args.lamina, (n, n, 5), args.threads, workdir, 2.0, solver)
             except RuntimeError as error:

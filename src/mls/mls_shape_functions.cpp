@@ -239,28 +239,36 @@ void weighted_gram(const BasisMatrix& basis, const Eigen::Map<const Eigen::Vecto
 }
 
 
-/// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), in one
-/// pass over the neighbours, four at a time (one accumulator per moment).
+/// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), four
+/// neighbours at a time with one accumulator per moment, in passes of at most 12 moments (all 35 of the
+/// 3D quadratic basis in one pass kept most accumulators in memory, not in the 16 vector registers).
 template <int Dim, Basis B>
 void moment_matrix(const Real* basis, const Real* weights, Index n,
                    Eigen::Matrix<Real, PolynomialBasis<Dim, B>::size, PolynomialBasis<Dim, B>::size>& a) {
   static constexpr MomentPlan<Dim, B> plan = MomentPlan<Dim, B>::make();
   constexpr int M = PolynomialBasis<Dim, B>::size;
   constexpr int C = plan.count;
+  constexpr int per_pass = 12;
   const Real* columns[M + 1];
   for (int k = 0; k < M; ++k) columns[k] = basis + k * n;
   columns[M] = weights;
-  Real4 sums[C];
-  for (int m = 0; m < C; ++m) sums[m] = Real4{0.0, 0.0, 0.0, 0.0};
-  for_each_block_of_four<M + 1>(columns, n, [&](const Real4* lanes) {
-    Real4 weighted[M];
-#pragma GCC unroll 16
-    for (int k = 0; k < M; ++k) weighted[k] = lanes[M] * lanes[k];
-#pragma GCC unroll 64
-    for (int m = 0; m < C; ++m) sums[m] = multiply_add(weighted[plan.column[m]], lanes[plan.row[m]], sums[m]);
-  });
   Real moments[C];
-  for (int m = 0; m < C; ++m) moments[m] = sum_lanes(sums[m]);
+  const auto pass = [&]<int First>(std::integral_constant<int, First>) {
+    constexpr int Count = std::min(per_pass, C - First);
+    Real4 sums[Count];
+    for (int m = 0; m < Count; ++m) sums[m] = Real4{0.0, 0.0, 0.0, 0.0};
+    for_each_block_of_four<M + 1>(columns, n, [&](const Real4* lanes) {
+#pragma GCC unroll 16
+      for (int m = 0; m < Count; ++m) {
+        const Real4 weighted = lanes[M] * lanes[plan.column[First + m]];  // w_j p_b (shared ones computed once)
+        sums[m] = multiply_add(weighted, lanes[plan.row[First + m]], sums[m]);
+      }
+    });
+    sum_lanes<Count>(sums, moments + First);
+  };
+  [&]<int... K>(std::integer_sequence<int, K...>) {
+    (pass(std::integral_constant<int, K * per_pass>{}), ...);
+  }(std::make_integer_sequence<int, (C + per_pass - 1) / per_pass>{});
   for (int b = 0; b < M; ++b)
     for (int row = b; row < M; ++row) a(row, b) = a(b, row) = moments[plan.moment_of[row][b]];
 }
@@ -677,13 +685,16 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       for (int d = 0; d < Dim; ++d) inverse_rho[d] = -1.0 / rho[d];
       const Real* offsets = workspace.offsets.data();
       Real* columns = workspace.basis.data();  // column k at k * n: vectorised over the neighbours j
-      for (Index j = 0; j < n; j += 4) {  // four neighbours at a time
-        const Index lanes = std::min<Index>(4, n - j);
+      const std::size_t stride = workspace.stride;
+      auto basis_values = [&](Index j, Index lanes) {  // four neighbours at a time
         Real4 z[3], p[P];
-        for (int d = 0; d < Dim; ++d) z[d] = load4(offsets + d * workspace.stride + j, lanes) * inverse_rho[d];
+        for (int d = 0; d < Dim; ++d) z[d] = load4(offsets + d * stride + j, lanes) * inverse_rho[d];
         Polynomial::values(z, p);
         for (int k = 0; k < P; ++k) store4(columns + k * n + j, p[k], lanes);
-      }
+      };
+      Index j = 0;
+      for (; j + 4 <= n; j += 4) basis_values(j, 4);
+      if (j < n) basis_values(j, n - j);
       if constexpr (Enriched)
         for (Index j = 0; j < n; ++j)
           basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
@@ -787,55 +798,51 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
 
   // First derivatives (eq 1-20): phi_I,i = w_I,i p_I.r + w_I p_I.r_,i with
   // r_,i = A^-1 (p_,i - A_,i r) and A_,i r = sum_J w_J,i (p_J . r) p_J.
-  // Two sweeps over the neighbours, four at a time: the first forms p_J.r, phi and the sums A_,i r,
-  // the second p_J.r_,i and phi_,i.
+  // Sweeps over the neighbours, four at a time: p_J.r and phi; then per direction the sums A_,i r;
+  // then per direction p_J.r_,i and phi_,i.
   if constexpr (Dim == 3) out.dphi.resize(3, n);  // every row written below
   else out.dphi.setZero(3, n);
   {
     Real* q = projection.data();
     Real* phi = out.phi.data();
-    Real4 sums[Dim][M];
-    for (int i = 0; i < Dim; ++i)
-      for (int k = 0; k < M; ++k) sums[i][k] = Real4{0.0, 0.0, 0.0, 0.0};
-    auto first_sweep = [&](Index j, Index lanes) {
+    const auto sweep = [n](auto&& block) {  // block(j, lanes) for j = 0, 4, 8, ... < n
+      Index j = 0;
+      for (; j + 4 <= n; j += 4) block(j, Index{4});
+      if (j < n) block(j, n - j);
+    };
+    sweep([&](Index j, Index lanes) {  // p_J . r and phi_J
       Real4 b[M];
       const Real4 projected = project(j, lanes, b);
-      const Real4 value = load4(weights + j, lanes) * projected;
       store4(q + j, projected, lanes);
-      store4(phi + j, value, lanes);
-      for (int i = 0; i < Dim; ++i) {
-        const Real4 c = load4(weights + (1 + i) * n + j, lanes) * projected;
-        for (int k = 0; k < M; ++k) sums[i][k] = multiply_add(c, b[k], sums[i][k]);
-      }
-    };
-    Index j = 0;
-    for (; j + 4 <= n; j += 4) first_sweep(j, 4);
-    if (j < n) first_sweep(j, n - j);
+      store4(phi + j, load4(weights + j, lanes) * projected, lanes);
+    });
+    // One direction per sweep, so that its M sums (and its M coefficients below) stay in registers.
     VectorM r_first[Dim];
     for (int i = 0; i < Dim; ++i) {
+      const Real* weight_i = weights + (1 + i) * n;
+      Real4 sums[M];
+      for (int k = 0; k < M; ++k) sums[k] = Real4{0.0, 0.0, 0.0, 0.0};
+      sweep([&](Index j, Index lanes) {
+        const Real4 c = load4(weight_i + j, lanes) * load4(q + j, lanes);
+        for (int k = 0; k < M; ++k) sums[k] = multiply_add(c, load4(columns + k * n + j, lanes), sums[k]);
+      });
       VectorM products;
-      for (int k = 0; k < M; ++k) products[k] = sum_lanes(sums[i][k]);
+      sum_lanes<M>(sums, products.data());
       r_first[i] = solve(VectorM(prepare(first_derivative(i)) - products));
     }
     Real* dphi = out.dphi.data();  // (i, J) at 3 J + i
     const bool keep = derivative_order >= 2;
-    auto second_sweep = [&](Index j, Index lanes) {
-      Real4 b[M];
-      for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
-      const Real4 projected = load4(q + j, lanes);
-      const Real4 w = load4(weights + j, lanes);
-      Real4 d[Dim];
-      for (int i = 0; i < Dim; ++i) {
-        Real4 t = b[0] * r_first[i][0];
-        for (int k = 1; k < M; ++k) t = multiply_add(b[k], r_first[i][k], t);
+    for (int i = 0; i < Dim; ++i) {
+      const Real* weight_i = weights + (1 + i) * n;
+      const VectorM& coefficients = r_first[i];
+      sweep([&](Index j, Index lanes) {
+        Real4 t = load4(columns + j, lanes) * coefficients[0];
+        for (int k = 1; k < M; ++k) t = multiply_add(load4(columns + k * n + j, lanes), coefficients[k], t);
         if (keep) store4(scratch + (1 + i) * n + j, t, lanes);  // p_J . r_,i for the second derivatives
-        d[i] = load4(weights + (1 + i) * n + j, lanes) * projected + w * t;
-      }
-      for (int i = 0; i < Dim; ++i)
-        for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[i][l];
-    };
-    for (j = 0; j + 4 <= n; j += 4) second_sweep(j, 4);
-    if (j < n) second_sweep(j, n - j);
+        const Real4 d = load4(weight_i + j, lanes) * load4(q + j, lanes) + load4(weights + j, lanes) * t;
+        for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[l];
+      });
+    }
   }
   if (derivative_order < 2) {
     out.ddphi.resize(6, 0);

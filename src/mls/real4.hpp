@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <cstring>
 
-#ifdef __AVX2__
+#ifdef __AVX__
 #include <immintrin.h>
 #endif
 
@@ -64,6 +64,23 @@ void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Bloc
 }
 
 inline Real sum_lanes(const Real4& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
+/// out[k] = sum_lanes(v[k]) for k < Count (the same sums, bitwise), four vectors at a time.
+template <int Count>
+inline void sum_lanes(const Real4* v, Real* out) {
+  int k = 0;
+#ifdef __AVX__
+  for (; k + 4 <= Count; k += 4) {
+    const __m256d a = reinterpret_cast<const __m256d&>(v[k]), b = reinterpret_cast<const __m256d&>(v[k + 1]);
+    const __m256d c = reinterpret_cast<const __m256d&>(v[k + 2]), d = reinterpret_cast<const __m256d&>(v[k + 3]);
+    const __m256d ab = _mm256_hadd_pd(a, b);  // a0+a1 b0+b1 a2+a3 b2+b3
+    const __m256d cd = _mm256_hadd_pd(c, d);  // c0+c1 d0+d1 c2+c3 d2+d3
+    const __m256d sums = _mm256_add_pd(_mm256_permute2f128_pd(ab, cd, 0x21), _mm256_blend_pd(ab, cd, 0b1100));
+    _mm256_storeu_pd(out + k, sums);
+  }
+#endif
+  for (; k < Count; ++k) out[k] = sum_lanes(v[k]);
+}
 
 /// a * b + c, fused where the CPU has FMA (x86-64-v3). The build turns off the compiler's own
 /// contraction (CMakeLists.txt: it changed an MPM case's rounding-sensitive path); these sums of
