@@ -227,17 +227,11 @@ def main():
         print(f"1. lamina EFG, R1a at {nodes[0]}x{nodes[1]}x{nodes[2]} nodes, {label}", flush=True)
         for threads in sorted({1, args.threads}):
             r = run_lamina(args.lamina, nodes, threads, workdir, kappa)
-            error = 100.0 * (r["w"] / REFERENCE - 1.0)
-            print(f"  {threads} thread(s): dofs {r['dofs']}, setup {r['setup_s']:.2f} s, assembly {r['assembly_s']:.2f} s, "
-                  f"solve {r['solve_s']:.2f} s, wall {r['wall_s']:.2f} s, peak {r['rss_mib']:.0f} MiB, "
-                  f"{r['gauss_points_per_s']:.0f} Gauss points/s, w = {r['w']:.5f} ({error:+.3f} %)", flush=True)
             tag = f"efg_r1a_{nodes[0]}x{nodes[1]}x{nodes[2]}{suffix}_{threads}thread"
-            bench += [(f"{tag}_setup", r["setup_s"], "s"), (f"{tag}_assembly", r["assembly_s"], "s"),
-                      (f"{tag}_solve", r["solve_s"], "s"), (f"{tag}_wall", r["wall_s"], "s"),
-                      (f"{tag}_peak_memory", r["rss_mib"], "MiB"),
+            bench += report_run(f"{threads} thread(s)", r, tag)
+            bench += [(f"{tag}_setup", r["setup_s"], "s"),
                       (f"{tag}_assembly_rate", r["gauss_points_per_s"], "gauss_points/s"),
-                      (f"{tag}_assembly_rate_over_200k", r["gauss_points_per_s"] / 2.0e5, "ratio"),
-                      (f"{tag}_error_percent", error, "%")]
+                      (f"{tag}_assembly_rate_over_200k", r["gauss_points_per_s"] / 2.0e5, "ratio")]
 
     if "2" not in skip:
         bench += time_to_accuracy_part(args, workdir)
@@ -245,6 +239,17 @@ def main():
     shutil.rmtree(workdir, ignore_errors=True)
     for name, value, unit in bench:
         print(f"BENCH {name} {value:.6g} {unit}")
+
+
+def report_run(label, r, tag):
+    """Prints one lamina run's figures; returns its BENCH rows (assembly, solve, wall, peak memory, error)."""
+    error = 100.0 * (r["w"] / REFERENCE - 1.0)
+    print(f"  {label}: dofs {r['dofs']}, setup {r['setup_s']:.2f} s, assembly {r['assembly_s']:.2f} s, "
+          f"solve {r['solve_s']:.2f} s, wall {r['wall_s']:.2f} s, peak {r['rss_mib']:.0f} MiB, "
+          f"{r['gauss_points_per_s']:.0f} Gauss points/s, w = {r['w']:.5f} ({error:+.3f} %)", flush=True)
+    return [(f"{tag}_assembly", r["assembly_s"], "s"), (f"{tag}_solve", r["solve_s"], "s"),
+            (f"{tag}_wall", r["wall_s"], "s"), (f"{tag}_peak_memory", r["rss_mib"], "MiB"),
+            (f"{tag}_error_percent", error, "%")]
 
 
 def large_part(args, workdir):
@@ -263,14 +268,8 @@ def large_part(args, workdir):
             except RuntimeError as error:
                 print(f"  {name}: failed ({error})", flush=True)
                 continue
-            error = 100.0 * (r["w"] / REFERENCE - 1.0)
-            print(f"  {name}: dofs {r['dofs']}, setup {r['setup_s']:.2f} s, assembly {r['assembly_s']:.2f} s, "
-                  f"solve {r['solve_s']:.2f} s, wall {r['wall_s']:.2f} s, peak {r['rss_mib']:.0f} MiB, "
-                  f"w = {r['w']:.5f} ({error:+.3f} %)", flush=True)
             tag = f"efg_r1a_{n}x{n}x5_kappa2_{name}_{args.threads}thread"
-            bench += [(f"{tag}_dofs", r["dofs"], "dofs"), (f"{tag}_assembly", r["assembly_s"], "s"),
-                      (f"{tag}_solve", r["solve_s"], "s"), (f"{tag}_wall", r["wall_s"], "s"),
-                      (f"{tag}_peak_memory", r["rss_mib"], "MiB"), (f"{tag}_error_percent", error, "%")]
+            bench += report_run(name, r, tag) + [(f"{tag}_dofs", r["dofs"], "dofs")]
             shutil.rmtree(os.path.join(workdir, f"lamina_{n}x{n}x5_{args.threads}t_k2.0"), ignore_errors=True)
     return bench
 
