@@ -11,7 +11,6 @@
 
 #include <fmt/format.h>
 
-
 #include "core/error.hpp"
 #include "mls/basis.hpp"
 #include "mls/moment_matrix.hpp"
@@ -84,8 +83,8 @@ void grow(Vector& vector, std::size_t size) {
 }
 
 /// Box supports: per direction d the factors w(s_d), w'(s_d) sign(dx_d) / R_d, w''(s_d) / R_d^2 into
-/// `factors` (9 rows of n), then their products; both passes are plain loops over j that vectorise.
-
+/// `factors` (9 rows of n), then their products (in 3D without second derivatives four at a time:
+/// GCC does not vectorise that loop itself).
 template <int Dim, Weight Kind, bool Second>
 void compute_box_weights(const WeightFunction& function, std::size_t n, std::size_t stride, const Real* offsets, const Real* inverse_radii,
                          Real* factors, Real* weights) {
@@ -237,7 +236,6 @@ void weighted_gram(const BasisMatrix& basis, const Eigen::Map<const Eigen::Vecto
     for (int row = col; row < M; ++row) a(row, col) = a(col, row) = weighted.dot(basis.col(row));
   }
 }
-
 
 /// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), four
 /// neighbours at a time with one accumulator per moment, in passes of at most 12 moments (all 35 of the
@@ -686,15 +684,12 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       const Real* offsets = workspace.offsets.data();
       Real* columns = workspace.basis.data();  // column k at k * n: vectorised over the neighbours j
       const std::size_t stride = workspace.stride;
-      auto basis_values = [&](Index j, Index lanes) {  // four neighbours at a time
+      for_each_group_of_four(n, [&](Index j, Index lanes) {
         Real4 z[3], p[P];
         for (int d = 0; d < Dim; ++d) z[d] = load4(offsets + d * stride + j, lanes) * inverse_rho[d];
         Polynomial::values(z, p);
         for (int k = 0; k < P; ++k) store4(columns + k * n + j, p[k], lanes);
-      };
-      Index j = 0;
-      for (; j + 4 <= n; j += 4) basis_values(j, 4);
-      if (j < n) basis_values(j, n - j);
+      });
       if constexpr (Enriched)
         for (Index j = 0; j < n; ++j)
           basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
@@ -805,11 +800,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   {
     Real* q = projection.data();
     Real* phi = out.phi.data();
-    const auto sweep = [n](auto&& block) {  // block(j, lanes) for j = 0, 4, 8, ... < n
-      Index j = 0;
-      for (; j + 4 <= n; j += 4) block(j, Index{4});
-      if (j < n) block(j, n - j);
-    };
+    const auto sweep = [n](auto&& block) { for_each_group_of_four(n, block); };
     sweep([&](Index j, Index lanes) {  // p_J . r and phi_J
       Real4 b[M];
       const Real4 projected = project(j, lanes, b);

@@ -25,6 +25,7 @@ class MomentMatrixFactor {
   /// ill-conditioned: a non-positive diagonal, a pivot of the scaled matrix below 1 / max_condition
   /// (then cond_2 >= 1 / pivot > max_condition for certain), or an estimate above max_condition.
   /// The pivots are those of the Cholesky factorisation (the diagonals of the Schur complements).
+  /// (Out of line: inlined into the MLS kernel it cost about 190 more instructions per point.)
   [[gnu::noinline]] bool factor(const Matrix& a, Real max_condition) {
     condition_ = std::numeric_limits<Real>::infinity();
     has_transform_ = false;

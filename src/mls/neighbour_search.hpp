@@ -54,8 +54,8 @@ class CellList {
     }
   }
 
-  /// Number of points for_each_candidate(low, high, ...) would visit (an upper bound for buffers).
-  /// An upper bound of count_candidates() from the number of cells the box overlaps (no walk over them).
+  /// An upper bound of the number of points for_each_candidate(low, high, ...) visits, from the number
+  /// of cells the box overlaps times the most points in one cell (no walk over the cells; for buffers).
   Index candidate_bound(const Vec3& low, const Vec3& high) const {
     if (order_.empty()) return 0;
     Index cells = 1;
@@ -64,12 +64,6 @@ class CellList {
       cells *= cell_coordinate(high[d], d) - cell_coordinate(low[d], d) + 1;
     }
     return std::min(size(), cells * max_per_cell_);
-  }
-
-  Index count_candidates(const Vec3& low, const Vec3& high) const {
-    Index count = 0;
-    for_each_candidate_range(low, high, [&](Index begin, Index end) { count += end - begin; });
-    return count;
   }
 
   /// Indices of the points with low <= p <= high (componentwise), sorted ascending.

@@ -42,6 +42,14 @@ inline void store4(Real* p, const Real4& v, Index lanes) {
   for (Index l = 0; l < lanes; ++l) p[l] = v[l];
 }
 
+/// Calls block(j, lanes) for j = 0, 4, 8, ... < n: lanes = 4, and n - j for the last, partial group.
+template <class Block>
+inline void for_each_group_of_four(Index n, Block&& block) {
+  Index j = 0;
+  for (; j + 4 <= n; j += 4) block(j, Index{4});
+  if (j < n) block(j, n - j);
+}
+
 /// Calls block(lanes) for the entries j .. j + 3 (j = 0, 4, 8, ... < n) of every array in `columns`,
 /// lanes[c] holding array c's four values; in the last partial block (n % 4 entries) the lanes past n
 /// are zero, so sums over the lanes need no tail loop.
