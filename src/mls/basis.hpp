@@ -99,7 +99,7 @@ struct MomentPlan {
   int count = 0;
   std::array<int, size*(size + 1) / 2> row{};     // per moment: a
   std::array<int, size*(size + 1) / 2> column{};  // per moment: b <= a
-  std::array<std::array<int, size>, size> moment_of{};  // [a][b], a >= b
+  std::array<std::array<int, size>, size> moment_of{};  // [a][b], both triangles
 
   static constexpr MomentPlan make() {
     MomentPlan plan;
@@ -116,7 +116,7 @@ struct MomentPlan {
           plan.column[plan.count] = b;
           ++plan.count;
         }
-        plan.moment_of[a][b] = seen[key];
+        plan.moment_of[a][b] = plan.moment_of[b][a] = seen[key];
       }
     }
     return plan;

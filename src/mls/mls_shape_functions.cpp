@@ -27,6 +27,7 @@ struct MlsWorkspace {
   std::vector<std::pair<Index, Index>> candidates;  // SELECT: (rank key index, cell-order position); grow-only
   std::vector<std::pair<Real, Index>> nearest;
   std::vector<Index> positions;     // node-centred gather: cell-order positions of the neighbours
+  std::vector<Index> kept;          // node-centred gather (AVX2): their node indices; grow-only
   bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * stride): x_d - x_I,d and 1 / R_I,d of the n neighbours
@@ -237,12 +238,12 @@ void weighted_gram(const BasisMatrix& basis, const Eigen::Map<const Eigen::Vecto
   }
 }
 
-/// The same for polynomial basis values p_j: only the distinct moments are computed (MomentPlan), four
-/// neighbours at a time with one accumulator per moment, in passes of at most 12 moments (all 35 of the
-/// 3D quadratic basis in one pass kept most accumulators in memory, not in the 16 vector registers).
+/// The distinct moments sum_j w_j p_a p_b of polynomial basis values p_j (MomentPlan; moment c is A_ab
+/// for every a, b with plan.moment_of[a][b] = c), four neighbours at a time with one accumulator per
+/// moment, in passes of at most 12 moments (all 35 of the 3D quadratic basis in one pass kept most
+/// accumulators in memory, not in the 16 vector registers).
 template <int Dim, Basis B>
-void moment_matrix(const Real* basis, const Real* weights, Index n,
-                   Eigen::Matrix<Real, PolynomialBasis<Dim, B>::size, PolynomialBasis<Dim, B>::size>& a) {
+void distinct_moments(const Real* basis, const Real* weights, Index n, Real* moments) {
   static constexpr MomentPlan<Dim, B> plan = MomentPlan<Dim, B>::make();
   constexpr int M = PolynomialBasis<Dim, B>::size;
   constexpr int C = plan.count;
@@ -250,7 +251,6 @@ void moment_matrix(const Real* basis, const Real* weights, Index n,
   const Real* columns[M + 1];
   for (int k = 0; k < M; ++k) columns[k] = basis + k * n;
   columns[M] = weights;
-  Real moments[C];
   const auto pass = [&]<int First>(std::integral_constant<int, First>) {
     constexpr int Count = std::min(per_pass, C - First);
     Real4 sums[Count];
@@ -267,8 +267,6 @@ void moment_matrix(const Real* basis, const Real* weights, Index n,
   [&]<int... K>(std::integer_sequence<int, K...>) {
     (pass(std::integral_constant<int, K * per_pass>{}), ...);
   }(std::make_integer_sequence<int, (C + per_pass - 1) / per_pass>{});
-  for (int b = 0; b < M; ++b)
-    for (int row = b; row < M; ++row) a(row, b) = a(b, row) = moments[plan.moment_of[row][b]];
 }
 
 /// out_j = b_j . v for the rows b_j of the n x M basis matrix (one fused pass, vectorised over j).
@@ -302,6 +300,23 @@ Eigen::Matrix<Real, M, 1> basis_transpose_times(const BasisMatrix& basis, const 
   return result;
 }
 
+/// Whether values[0..n) is strictly ascending (four comparisons at a time with AVX2).
+bool is_ascending(const Index* values, std::size_t n) {
+  std::size_t j = 1;
+  bool ascending = true;
+#ifdef __AVX2__
+  __m256i in_order = _mm256_set1_epi64x(-1);
+  for (; j + 4 <= n; j += 4) {
+    const __m256i previous = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(values + j - 1));
+    const __m256i current = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(values + j));
+    in_order = _mm256_and_si256(in_order, _mm256_cmpgt_epi64(current, previous));
+  }
+  ascending = _mm256_movemask_pd(_mm256_castsi256_pd(in_order)) == 0b1111;
+#endif
+  for (; j < n; ++j) ascending &= values[j - 1] < values[j];
+  return ascending;
+}
+
 std::string format_point(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", x[0], x[1], x[2]); }
 
 }  // namespace
@@ -325,6 +340,7 @@ FieldValue approximate_field(const ShapeFunctionValues& shape, const Eigen::Ref<
 MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eigen::Matrix3Xd spacing)
     : nodes_(std::move(nodes)), options_(std::move(options)) {
   options_.validate();
+  weight_function_ = WeightFunction(options_.weight, options_.gauss_beta);
   const int dimension = options_.dimension;
   basis_size_ = mls::basis_size(dimension, options_.basis);
   const Index count = nodes_.cols();
@@ -429,6 +445,8 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
     sorted_inverse_radii_ = Eigen::Matrix3Xd::Zero(3, count);
     for (Index k = 0; k < count; ++k)
       for (int d = 0; d < dimension; ++d) sorted_inverse_radii_(d, k) = 1.0 / radii_(d, cells_.order()[k]);
+    sorted_order_.assign(cells_.order().begin(), cells_.order().end());
+    sorted_order_.resize(static_cast<std::size_t>(count) + 4, 0);
     row_stride_ = static_cast<std::size_t>(count) + 4;
     sorted_rows_.assign(6 * row_stride_, 0.0);
     for (Index k = 0; k < count; ++k)
@@ -461,9 +479,12 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     const Vec3 low = x - reach, high = x + reach;
     const auto stride = static_cast<std::size_t>(cells_.candidate_bound(low, high) + 4);
     grow(workspace.positions, stride);
+    grow(workspace.kept, stride);
     grow(workspace.offsets, 3 * stride);
     grow(workspace.inverse_radii, 3 * stride);
     Index* positions = workspace.positions.data();
+    Index* kept_indices = workspace.kept.data();
+    const Index* node_of_position = sorted_order_.data();  // order() padded with 4 entries
     Real* offset_rows = workspace.offsets.data();
     Real* inverse_rows = workspace.inverse_radii.data();
     const Real* points = sorted.data();
@@ -500,6 +521,8 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
         const __m256i position = _mm256_add_epi64(_mm256_set1_epi64x(k), _mm256_setr_epi64x(0, 1, 2, 3));
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(positions + count),
                             _mm256_permutevar8x32_epi32(position, permutation));
+        const __m256i node = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(node_of_position + k));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(kept_indices + count), _mm256_permutevar8x32_epi32(node, permutation));
         count += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(kept)));
 #else
         for (int l = 0; l < 4; ++l) {
@@ -545,9 +568,14 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     workspace.indices.resize(n);
     Index* indices = workspace.indices.data();
     bool ascending = true;
-    for (std::size_t j = 0; j < n; ++j) {
-      indices[j] = order[positions[j]];
-      ascending &= j == 0 || indices[j - 1] < indices[j];
+    if (packed) {  // pass 1 kept the node indices as well
+      std::copy(kept_indices, kept_indices + n, indices);
+      ascending = is_ascending(indices, n);
+    } else {
+      for (std::size_t j = 0; j < n; ++j) {
+        indices[j] = order[positions[j]];
+        ascending &= j == 0 || indices[j - 1] < indices[j];
+      }
     }
     const auto write = [&] {
       for (std::size_t j = 0; j < n; ++j) {
@@ -638,7 +666,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
 
   Vec3 x = x_in;
   for (int d = Dim; d < 3; ++d) x[d] = 0.0;
-  const WeightFunction function(options_.weight, options_.gauss_beta);
+  const WeightFunction& function = weight_function_;
   const bool box = options_.shape == SupportShape::box;
   const bool node_centred_mode = node_centred();
   Real radius_factor = 1.0;
@@ -693,9 +721,16 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       if constexpr (Enriched)
         for (Index j = 0; j < n; ++j)
           basis(j, P) = std::abs(signed_distance(projected_.col(workspace.indices[static_cast<std::size_t>(j)]))) / rho_n;
-      if constexpr (Enriched) weighted_gram<M>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
-      else moment_matrix<Dim, B>(workspace.basis.data(), workspace.weights.data(), n, a);
-      regular = factor.factor(a, options_.max_condition);
+      if constexpr (Enriched) {
+        weighted_gram<M>(basis, ConstVectorMap(workspace.weights.data(), n), workspace.scratch.data(), a);
+        regular = factor.factor(a, options_.max_condition);
+      } else {  // A straight from its distinct moments
+        static constexpr MomentPlan<Dim, B> plan = MomentPlan<Dim, B>::make();
+        Real moments[plan.count];
+        distinct_moments<Dim, B>(workspace.basis.data(), workspace.weights.data(), n, moments);
+        regular = factor.factor_entries([&moments](int i, int j) { return moments[plan.moment_of[i][j]]; },
+                                        options_.max_condition);
+      }
       condition = factor.condition();
     }
     if (regular) {
@@ -770,7 +805,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     return g;
   };
   const VectorM r = solve(prepare(unit));
-  out.neighbours.assign(workspace.indices.begin(), workspace.indices.end());
+  out.neighbours.swap(workspace.indices);  // the next gather rewrites the workspace's list
   const Real* columns = basis.data();  // column k at k * n
   // p_J . r for the neighbours j .. j + lanes - 1 (the same sums for every derivative order)
   const auto project = [&](Index j, Index lanes, Real4* b) {

@@ -7,6 +7,7 @@
 #include "mls/mls_options.hpp"
 #include "mls/neighbour_search.hpp"
 #include "mls/singular_moment_matrix.hpp"
+#include "mls/weight_function.hpp"
 
 namespace lamina::mls {
 
@@ -110,6 +111,7 @@ class MlsShapeFunctions {
   PointMatrix nodes_;             // as given
   PointMatrix projected_;         // unused dimensions zeroed
   MlsOptions options_;
+  WeightFunction weight_function_;  // options_.weight with options_.gauss_beta
   int basis_size_ = 0;
   Eigen::Matrix3Xd spacing_;
   Eigen::Matrix3Xd radii_;        // node-centred modes: per node and axis (original order)
@@ -118,6 +120,7 @@ class MlsShapeFunctions {
   /// node_count() + 4 values in the cell list's order, so that the support test runs four nodes at a
   /// time over each row of cells.
   std::vector<Real> sorted_rows_;
+  std::vector<Index> sorted_order_;  // node-centred modes: cells_.order() and 4 padding entries
   std::size_t row_stride_ = 0;
   Vec3 max_radius_ = Vec3::Zero();
   /// Point-centred modes: 1 / (mean nodal spacing) per axis; distances for "the N nearest" and the

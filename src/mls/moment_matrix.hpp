@@ -25,30 +25,39 @@ class MomentMatrixFactor {
   /// ill-conditioned: a non-positive diagonal, a pivot of the scaled matrix below 1 / max_condition
   /// (then cond_2 >= 1 / pivot > max_condition for certain), or an estimate above max_condition.
   /// The pivots are those of the Cholesky factorisation (the diagonals of the Schur complements).
-  /// (Out of line: inlined into the MLS kernel it cost about 190 more instructions per point.)
-  [[gnu::noinline]] bool factor(const Matrix& a, Real max_condition) {
+  bool factor(const Matrix& a, Real max_condition) {
+    return factor_entries([&a](int i, int j) { return a(i, j); }, max_condition);
+  }
+
+  /// The same for A given by its entries, entry(i, j) = A_ij (for the MLS kernel: straight from the
+  /// distinct moments, without forming A). (Out of line: inlined into the MLS kernel it cost about 190
+  /// more instructions per point.)
+  template <class Entry>
+  [[gnu::noinline]] bool factor_entries(const Entry& entry, Real max_condition) {
     condition_ = std::numeric_limits<Real>::infinity();
     has_transform_ = false;
     // S as vectors of four (vector square roots and divisions; padding lanes 1).
     Real4* scale = scale_;
     for (int b = 0; b < blocks; ++b) {
       Real4 diagonal;
-      for (int l = 0; l < 4; ++l) diagonal[l] = 4 * b + l < M ? a(4 * b + l, 4 * b + l) : 1.0;
+      for (int l = 0; l < 4; ++l) diagonal[l] = 4 * b + l < M ? entry(4 * b + l, 4 * b + l) : 1.0;
       for (int l = 0; l < 4; ++l)
         if (!(diagonal[l] > 0.0) || !std::isfinite(diagonal[l])) return false;
       scale[b] = 1.0 / Real4{std::sqrt(diagonal[0]), std::sqrt(diagonal[1]), std::sqrt(diagonal[2]),
                              std::sqrt(diagonal[3])};
     }
-    // A_s = S A S by rows (column i of the column-major A is row i of the symmetric A), padded with
-    // zeros; its 1-norm (the largest row sum of |A_s|).
+    // A_s = S A S by rows (A symmetric: row i holds A_ji), padded with zeros; its 1-norm (the largest
+    // row sum of |A_s|).
     Real norm = 0.0;
+#pragma GCC unroll 16
     for (int i = 0; i < M; ++i) {
-      const Real* column = a.data() + i * M;
       const Real scale_i = scale[i / 4][i % 4];
       Real4 sums = {0.0, 0.0, 0.0, 0.0};
+#pragma GCC unroll 4
       for (int b = 0; b < blocks; ++b) {
         Real4 values;
-        for (int l = 0; l < 4; ++l) values[l] = 4 * b + l < M ? column[4 * b + l] : 0.0;
+#pragma GCC unroll 4
+        for (int l = 0; l < 4; ++l) values[l] = 4 * b + l < M ? entry(4 * b + l, i) : 0.0;
         const Real4 row = values * scale[b] * scale_i;
         rows_[i][b] = row;
         sums += row < 0.0 ? -row : row;
@@ -108,14 +117,16 @@ class MomentMatrixFactor {
     const Real pivot = rows_[K][kb][kl];
     if (!(pivot > minimum_pivot)) return false;
     const Real inverse_pivot = 1.0 / pivot;
+    // In place: column K of the identity shares column K of A, so its entry is set before the update
+    // (1 in the pivot row, 0 in the others) and the update then writes 1 / pivot and -factor / pivot.
+    rows_[K][kb][kl] = 1.0;
     Real4 row[blocks];
     for (int b = 0; b < blocks; ++b) row[b] = rows_[K][b] * inverse_pivot;
-    row[kb][kl] = inverse_pivot;
     for (int i = 0; i < M; ++i) {
       if (i == K) continue;
       const Real factor = rows_[i][kb][kl];
+      rows_[i][kb][kl] = 0.0;
       for (int b = 0; b < blocks; ++b) rows_[i][b] -= factor * row[b];
-      rows_[i][kb][kl] = -factor * inverse_pivot;
     }
     for (int b = 0; b < blocks; ++b) rows_[K][b] = row[b];
     return true;

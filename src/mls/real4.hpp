@@ -25,12 +25,24 @@ inline Real4 load4(const Real* p) {
   return v;
 }
 
-/// The first `lanes` (1..4) values from p, the other lanes zero.
+#ifdef __AVX__
+/// Lane masks of the first 0..4 lanes (for the masked loads and stores of a partial group).
+alignas(32) inline constexpr std::int64_t first_lanes_mask[5][4] = {
+    {0, 0, 0, 0}, {-1, 0, 0, 0}, {-1, -1, 0, 0}, {-1, -1, -1, 0}, {-1, -1, -1, -1}};
+inline __m256i first_lanes(Index lanes) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(first_lanes_mask[lanes])); }
+#endif
+
+/// The first `lanes` (1..4) values from p, the other lanes zero (nothing past them is read).
 inline Real4 load4(const Real* p, Index lanes) {
   if (lanes == 4) return load4(p);
+#ifdef __AVX__
+  const __m256d v = _mm256_maskload_pd(p, first_lanes(lanes));
+  return reinterpret_cast<const Real4&>(v);
+#else
   Real4 v = {0.0, 0.0, 0.0, 0.0};
   for (Index l = 0; l < lanes; ++l) v[l] = p[l];
   return v;
+#endif
 }
 
 /// Stores the first `lanes` (1..4) values of v at p.
@@ -39,7 +51,11 @@ inline void store4(Real* p, const Real4& v, Index lanes) {
     std::memcpy(p, &v, sizeof v);
     return;
   }
+#ifdef __AVX__
+  _mm256_maskstore_pd(p, first_lanes(lanes), reinterpret_cast<const __m256d&>(v));
+#else
   for (Index l = 0; l < lanes; ++l) p[l] = v[l];
+#endif
 }
 
 /// Calls block(j, lanes) for j = 0, 4, 8, ... < n: lanes = 4, and n - j for the last, partial group.
@@ -63,10 +79,7 @@ void for_each_block_of_four(const Real* const (&columns)[Columns], Index n, Bloc
   }
   if (j < n) {
     Real4 lanes[Columns];
-    for (int c = 0; c < Columns; ++c) {
-      lanes[c] = Real4{0.0, 0.0, 0.0, 0.0};
-      for (Index l = 0; j + l < n; ++l) lanes[c][l] = columns[c][j + l];
-    }
+    for (int c = 0; c < Columns; ++c) lanes[c] = load4(columns[c] + j, n - j);
     block(lanes);
   }
 }
