@@ -37,6 +37,9 @@ struct MlsWorkspace {
   std::vector<Real> weights;        // 10 arrays of n: w, w_x, w_y, w_z, w_xx, w_yy, w_zz, w_xy, w_yz, w_zx
   std::vector<Real> basis;          // n x m, column k = basis term k at the neighbours
   std::vector<Real> scratch;        // n x max(9, m): weight factors; p_I.r, p_I.r_,i, combined terms, weighted column / n x m
+  // Output storage by neighbour count (slot k: empty, or k values / columns), see fit_size.
+  std::vector<Eigen::VectorXd> phi_by_size;
+  std::vector<Eigen::Matrix3Xd> dphi_by_size;
 };
 
 }  // namespace detail
@@ -81,6 +84,28 @@ detail::MlsWorkspace& thread_workspace() {
 template <class Vector>
 void grow(Vector& vector, std::size_t size) {
   if (vector.size() < size) vector.resize(size);
+}
+
+/// Gives `m` (a vector of `previous` values, or a matrix of fixed rows and `previous` columns) the size
+/// n without freeing and allocating where it can: the neighbour count changes from point to point, so
+/// a reused output swaps its storage with the one of that size kept in `by_size` (after a few points
+/// every size seen has its storage). Sizes from 1024 on are resized in place.
+template <class Matrix>
+void fit_size(std::vector<Matrix>& by_size, Matrix& m, Index previous, Index n) {
+  if (previous == n) return;
+  constexpr Index pooled = 1024;
+  if (n < pooled && previous < pooled) {
+    const auto slots = static_cast<std::size_t>(std::max(n, previous)) + 1;
+    if (by_size.size() < slots) by_size.resize(slots);
+    Matrix taken = std::move(by_size[static_cast<std::size_t>(n)]);
+    by_size[static_cast<std::size_t>(previous)] = std::move(m);
+    m = std::move(taken);
+  }
+  if constexpr (Matrix::ColsAtCompileTime == 1) {
+    if (m.size() != n) m.resize(n);
+  } else {
+    if (m.cols() != n) m.resize(Eigen::NoChange, n);
+  }
 }
 
 /// Box supports: per direction d the factors w(s_d), w'(s_d) sign(dx_d) / R_d, w''(s_d) / R_d^2 into
@@ -808,13 +833,15 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   out.neighbours.swap(workspace.indices);  // the next gather rewrites the workspace's list
   const Real* columns = basis.data();  // column k at k * n
   // p_J . r for the neighbours j .. j + lanes - 1 (the same sums for every derivative order)
+  Real4 r4[M];  // r's coefficients broadcast once (not once per group)
+  for (int k = 0; k < M; ++k) r4[k] = Real4{r[k], r[k], r[k], r[k]};
   const auto project = [&](Index j, Index lanes, Real4* b) {
     for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
-    Real4 projected = b[0] * r[0];
-    for (int k = 1; k < M; ++k) projected = multiply_add(b[k], r[k], projected);
+    Real4 projected = b[0] * r4[0];
+    for (int k = 1; k < M; ++k) projected = multiply_add(b[k], r4[k], projected);
     return projected;
   };
-  out.phi.resize(n);
+  fit_size(workspace.phi_by_size, out.phi, out.phi.size(), n);
   if (derivative_order < 1) {
     for (Index j = 0; j < n; j += 4) {
       const Index lanes = std::min<Index>(4, n - j);
@@ -830,7 +857,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   // r_,i = A^-1 (p_,i - A_,i r) and A_,i r = sum_J w_J,i (p_J . r) p_J.
   // Sweeps over the neighbours, four at a time: p_J.r and phi; then per direction the sums A_,i r;
   // then per direction p_J.r_,i and phi_,i.
-  if constexpr (Dim == 3) out.dphi.resize(3, n);  // every row written below
+  if constexpr (Dim == 3) fit_size(workspace.dphi_by_size, out.dphi, out.dphi.cols(), n);  // every row written below
   else out.dphi.setZero(3, n);
   {
     Real* q = projection.data();
@@ -856,19 +883,33 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       sum_lanes<M>(sums, products.data());
       r_first[i] = solve(VectorM(prepare(first_derivative(i)) - products));
     }
+    // Then every direction in one sweep: the basis values loaded once, the coefficients of r_,i
+    // broadcast once.
     Real* dphi = out.dphi.data();  // (i, J) at 3 J + i
     const bool keep = derivative_order >= 2;
-    for (int i = 0; i < Dim; ++i) {
-      const Real* weight_i = weights + (1 + i) * n;
-      const VectorM& coefficients = r_first[i];
-      sweep([&](Index j, Index lanes) {
-        Real4 t = load4(columns + j, lanes) * coefficients[0];
-        for (int k = 1; k < M; ++k) t = multiply_add(load4(columns + k * n + j, lanes), coefficients[k], t);
+    Real4 coefficients[Dim][M];
+    for (int i = 0; i < Dim; ++i)
+      for (int k = 0; k < M; ++k) coefficients[i][k] = Real4{r_first[i][k], r_first[i][k], r_first[i][k], r_first[i][k]};
+    sweep([&](Index j, Index lanes) {
+      Real4 b[M];
+      for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
+      const Real4 projected = load4(q + j, lanes), weight = load4(weights + j, lanes);
+      Real4 d[Dim];
+      for (int i = 0; i < Dim; ++i) {
+        Real4 t = b[0] * coefficients[i][0];
+        for (int k = 1; k < M; ++k) t = multiply_add(b[k], coefficients[i][k], t);
         if (keep) store4(scratch + (1 + i) * n + j, t, lanes);  // p_J . r_,i for the second derivatives
-        const Real4 d = load4(weight_i + j, lanes) * load4(q + j, lanes) + load4(weights + j, lanes) * t;
-        for (Index l = 0; l < lanes; ++l) dphi[3 * (j + l) + i] = d[l];
-      });
-    }
+        d[i] = load4(weights + (1 + i) * n + j, lanes) * projected + weight * t;
+      }
+      if constexpr (Dim == 3) {
+        if (lanes == 4) {
+          store_interleaved3(dphi + 3 * j, d[0], d[1], d[2]);
+          return;
+        }
+      }
+      for (Index l = 0; l < lanes; ++l)
+        for (int i = 0; i < Dim; ++i) dphi[3 * (j + l) + i] = d[i][l];
+    });
   }
   if (derivative_order < 2) {
     out.ddphi.resize(6, 0);

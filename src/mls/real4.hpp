@@ -58,6 +58,27 @@ inline void store4(Real* p, const Real4& v, Index lanes) {
 #endif
 }
 
+/// Stores a0 b0 c0 a1 b1 c1 a2 b2 c2 a3 b3 c3 at p (four 3-vectors from three vectors of components).
+inline void store_interleaved3(Real* p, const Real4& a, const Real4& b, const Real4& c) {
+#ifdef __AVX__
+  const __m256d x = reinterpret_cast<const __m256d&>(a), y = reinterpret_cast<const __m256d&>(b),
+                z = reinterpret_cast<const __m256d&>(c);
+  const __m256d even = _mm256_unpacklo_pd(x, y);     // a0 b0 a2 b2
+  const __m256d odd = _mm256_unpackhi_pd(x, y);      // a1 b1 a3 b3
+  const __m256d c_a = _mm256_shuffle_pd(z, odd, 0);  // c0 a1 c2 a3
+  const __m256d b_c = _mm256_shuffle_pd(odd, z, 15); // b1 c1 b3 c3
+  _mm256_storeu_pd(p, _mm256_permute2f128_pd(even, c_a, 0x20));  // a0 b0 c0 a1
+  _mm256_storeu_pd(p + 4, _mm256_blend_pd(b_c, even, 0b1100));    // b1 c1 a2 b2
+  _mm256_storeu_pd(p + 8, _mm256_permute2f128_pd(c_a, b_c, 0x31)); // c2 a3 b3 c3
+#else
+  for (int l = 0; l < 4; ++l) {
+    p[3 * l] = a[l];
+    p[3 * l + 1] = b[l];
+    p[3 * l + 2] = c[l];
+  }
+#endif
+}
+
 /// Calls block(j, lanes) for j = 0, 4, 8, ... < n: lanes = 4, and n - j for the last, partial group.
 template <class Block>
 inline void for_each_group_of_four(Index n, Block&& block) {
