@@ -27,7 +27,7 @@ struct MlsWorkspace {
   std::vector<std::pair<Index, Index>> candidates;  // SELECT: (rank key index, cell-order position); grow-only
   std::vector<std::pair<Real, Index>> nearest;
   std::vector<Index> positions;     // node-centred gather: cell-order positions of the neighbours
-  std::vector<Index> kept;          // node-centred gather (AVX2): their node indices; grow-only
+  std::vector<Index> kept_nodes;    // node-centred gather (AVX2): their node indices; grow-only
   bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * stride): x_d - x_I,d and 1 / R_I,d of the n neighbours
@@ -498,17 +498,17 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
   if (node_centred()) {
     // Pass 1 tests the candidates four at a time along each row of cells (lanes past the row's end are
     // masked off) and keeps the cell-order positions of the nodes whose supports cover x (about half of
-    // the candidates). With AVX2 it also keeps their offsets x - x_I and inverse radii, packed by a lane
-    // permutation into rows of `stride`; otherwise pass 2 writes them from the positions.
+    // the candidates). With AVX2 it also keeps their node indices, offsets x - x_I and inverse radii,
+    // packed by a lane permutation (rows of `stride`); otherwise pass 2 writes them from the positions.
     const Vec3 reach = max_radius_ * radius_factor;
     const Vec3 low = x - reach, high = x + reach;
     const auto stride = static_cast<std::size_t>(cells_.candidate_bound(low, high) + 4);
     grow(workspace.positions, stride);
-    grow(workspace.kept, stride);
+    grow(workspace.kept_nodes, stride);
     grow(workspace.offsets, 3 * stride);
     grow(workspace.inverse_radii, 3 * stride);
     Index* positions = workspace.positions.data();
-    Index* kept_indices = workspace.kept.data();
+    Index* kept_nodes = workspace.kept_nodes.data();
     const Index* node_of_position = sorted_order_.data();  // order() padded with 4 entries
     Real* offset_rows = workspace.offsets.data();
     Real* inverse_rows = workspace.inverse_radii.data();
@@ -547,7 +547,7 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(positions + count),
                             _mm256_permutevar8x32_epi32(position, permutation));
         const __m256i node = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(node_of_position + k));
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(kept_indices + count), _mm256_permutevar8x32_epi32(node, permutation));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(kept_nodes + count), _mm256_permutevar8x32_epi32(node, permutation));
         count += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(kept)));
 #else
         for (int l = 0; l < 4; ++l) {
@@ -594,7 +594,7 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
     Index* indices = workspace.indices.data();
     bool ascending = true;
     if (packed) {  // pass 1 kept the node indices as well
-      std::copy(kept_indices, kept_indices + n, indices);
+      std::copy(kept_nodes, kept_nodes + n, indices);
       ascending = is_ascending(indices, n);
     } else {
       for (std::size_t j = 0; j < n; ++j) {
@@ -856,7 +856,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   // First derivatives (eq 1-20): phi_I,i = w_I,i p_I.r + w_I p_I.r_,i with
   // r_,i = A^-1 (p_,i - A_,i r) and A_,i r = sum_J w_J,i (p_J . r) p_J.
   // Sweeps over the neighbours, four at a time: p_J.r and phi; then per direction the sums A_,i r;
-  // then per direction p_J.r_,i and phi_,i.
+  // then p_J.r_,i and phi_,i of every direction in one sweep.
   if constexpr (Dim == 3) fit_size(workspace.dphi_by_size, out.dphi, out.dphi.cols(), n);  // every row written below
   else out.dphi.setZero(3, n);
   {
