@@ -741,6 +741,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
         Real4 z[3], p[P];
         for (int d = 0; d < Dim; ++d) z[d] = load4(offsets + d * stride + j, lanes) * inverse_rho[d];
         Polynomial::values(z, p);
+#pragma GCC unroll 16
         for (int k = 0; k < P; ++k) store4(columns + k * n + j, p[k], lanes);
       });
       if constexpr (Enriched)
@@ -788,8 +789,9 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   //  orthonormal:  basis rows q_I = T p_I (orthonormalised once more, T <- T2 T), right-hand sides
   //                T g, solve(h) = h -- used above orthonormalise_condition for accuracy.
   const bool orthonormal = out.condition > orthonormalise_condition;
-  MatrixM transform = orthonormal ? factor.transform() : MatrixM::Identity();
+  MatrixM transform;  // set (and used) only when orthonormal: no identity matrix is filled per point
   if (orthonormal) {
+    transform = factor.transform();
     // rows b_I <- T b_I, through the scratch buffer (no allocation)
     auto transform_rows = [&](const MatrixM& by) {
       BasisMap transformed(scratch, n, M);

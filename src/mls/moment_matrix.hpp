@@ -132,8 +132,9 @@ class MomentMatrixFactor {
     return true;
   }
 
-  /// Left-looking Cholesky of A_s by rows, then T = L^-1 S by rows.
-  void form_transform() const {
+  /// Left-looking Cholesky of A_s by rows, then T = L^-1 S by rows. (Out of line: only the orthonormal
+  /// path calls it, and inlined GCC 12 could not see that it writes every entry of transform_.)
+  [[gnu::noinline]] void form_transform() const {
     auto scaled = [&](int i, int j) { return scaled_[i][j / 4][j % 4]; };
     Real lower[M][M];
     Real inverse_diagonal[M];

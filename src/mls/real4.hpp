@@ -20,9 +20,24 @@ using Real4 = Real __attribute__((vector_size(32)));  // four doubles (one AVX2 
 
 /// Four consecutive values from p (unaligned).
 inline Real4 load4(const Real* p) {
+#ifdef __AVX__
+  const __m256d v = _mm256_loadu_pd(p);
+  return reinterpret_cast<const Real4&>(v);
+#else
   Real4 v;
   std::memcpy(&v, p, sizeof v);
   return v;
+#endif
+}
+
+/// Stores the four values of v at p (unaligned). (With AVX one 32-byte store: GCC lowered the memcpy of a
+/// vector from a stack copy into two 16-byte moves in a loop.)
+inline void store4(Real* p, const Real4& v) {
+#ifdef __AVX__
+  _mm256_storeu_pd(p, reinterpret_cast<const __m256d&>(v));
+#else
+  std::memcpy(p, &v, sizeof v);
+#endif
 }
 
 #ifdef __AVX__
@@ -48,7 +63,7 @@ inline Real4 load4(const Real* p, Index lanes) {
 /// Stores the first `lanes` (1..4) values of v at p.
 inline void store4(Real* p, const Real4& v, Index lanes) {
   if (lanes == 4) {
-    std::memcpy(p, &v, sizeof v);
+    store4(p, v);
     return;
   }
 #ifdef __AVX__
