@@ -325,7 +325,8 @@ Eigen::Matrix<Real, M, 1> basis_transpose_times(const BasisMatrix& basis, const 
   return result;
 }
 
-/// Whether values[0..n) is strictly ascending (four comparisons at a time with AVX2).
+/// Whether values[0..n) is strictly ascending (std::adjacent_find with >=, but four comparisons at a
+/// time with AVX2: it runs once per evaluation point).
 bool is_ascending(const Index* values, std::size_t n) {
   std::size_t j = 1;
   bool ascending = true;
@@ -845,11 +846,10 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   };
   fit_size(workspace.phi_by_size, out.phi, out.phi.size(), n);
   if (derivative_order < 1) {
-    for (Index j = 0; j < n; j += 4) {
-      const Index lanes = std::min<Index>(4, n - j);
+    for_each_group_of_four(n, [&](Index j, Index lanes) {
       Real4 b[M];
       store4(out.phi.data() + j, load4(weights + j, lanes) * project(j, lanes, b), lanes);
-    }
+    });
     out.dphi.resize(3, 0);
     out.ddphi.resize(6, 0);
     return true;
@@ -864,8 +864,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   {
     Real* q = projection.data();
     Real* phi = out.phi.data();
-    const auto sweep = [n](auto&& block) { for_each_group_of_four(n, block); };
-    sweep([&](Index j, Index lanes) {  // p_J . r and phi_J
+    for_each_group_of_four(n, [&](Index j, Index lanes) {  // p_J . r and phi_J
       Real4 b[M];
       const Real4 projected = project(j, lanes, b);
       store4(q + j, projected, lanes);
@@ -877,7 +876,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       const Real* weight_i = weights + (1 + i) * n;
       Real4 sums[M];
       for (int k = 0; k < M; ++k) sums[k] = Real4{0.0, 0.0, 0.0, 0.0};
-      sweep([&](Index j, Index lanes) {
+      for_each_group_of_four(n, [&](Index j, Index lanes) {
         const Real4 c = load4(weight_i + j, lanes) * load4(q + j, lanes);
         for (int k = 0; k < M; ++k) sums[k] = multiply_add(c, load4(columns + k * n + j, lanes), sums[k]);
       });
@@ -892,7 +891,7 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
     Real4 coefficients[Dim][M];
     for (int i = 0; i < Dim; ++i)
       for (int k = 0; k < M; ++k) coefficients[i][k] = Real4{r_first[i][k], r_first[i][k], r_first[i][k], r_first[i][k]};
-    sweep([&](Index j, Index lanes) {
+    for_each_group_of_four(n, [&](Index j, Index lanes) {
       Real4 b[M];
       for (int k = 0; k < M; ++k) b[k] = load4(columns + k * n + j, lanes);
       const Real4 projected = load4(q + j, lanes), weight = load4(weights + j, lanes);
