@@ -151,8 +151,24 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // membrane, curvature and transverse shear rates (eqs (21)-(24))
   const Real dx = b1.dot(vx), dy = b2.dot(vy), dxy2 = b2.dot(vx) + b1.dot(vy);
   const Real kx = b1.dot(ty), ky = -b2.dot(tx), kxy2 = b2.dot(ty) - b1.dot(tx);
-  const Real dxz2 = b1.dot(vz) + 0.25 * ty.sum();
-  const Real dyz2 = b2.dot(vz) - 0.25 * tx.sum();
+  // transverse shear: the seed's one-point rates (coefficient model), or the MITC4 assumed covariant shears
+  // at the centre (physical model), which leave a Kirchhoff field free on any quadrilateral: the one-point
+  // gradient of a quadratic w on a trapezoid misses it by (taper x skew) terms, which locked bending
+  const bool physical = section_.hourglass_model == HourglassModel::physical;
+  const Row4 tz = wl.row(2);
+  const EdgeShears edges = physical ? edge_shears(xh, yh, zh, corner_normals(xh, yh, zh)) : EdgeShears{};
+  std::array<RateRows, 2> shear_rows;
+  if (physical) {
+    shear_rows = centre_shear(edges, xh, yh);
+    // the rows act on the raw velocities; with the warping correction v_x, v_y carry + (b . v_z) z
+    if (warped)
+      for (RateRows& r : shear_rows) r.vz -= r.vx.dot(zh) * b1 + r.vy.dot(zh) * b2;
+  }
+  auto rate_of = [&](const RateRows& r) {
+    return r.vx.dot(vx) + r.vy.dot(vy) + r.vz.dot(vz) + r.tx.dot(tx) + r.ty.dot(ty) + r.tz.dot(tz);
+  };
+  const Real dxz2 = physical ? rate_of(shear_rows[0]) : b1.dot(vz) + 0.25 * ty.sum();
+  const Real dyz2 = physical ? rate_of(shear_rows[1]) : b2.dot(vz) - 0.25 * tx.sum();
 
   // stress update through the thickness and resultants (eqs (27)-(29))
   const Real h = thickness;
@@ -201,15 +217,30 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   NodeMatrix fl, ml;
   fl.row(0) = area * (b1 * nxx + b2 * nxy);
   fl.row(1) = area * (b2 * nyy + b1 * nxy);
-  fl.row(2) = area * (b1 * qxz + b2 * qyz);
-  ml.row(0) = area * (-b2 * myy - b1 * mxy - Row4::Constant(0.25 * qyz));
-  ml.row(1) = area * (b1 * mxx + b2 * mxy + Row4::Constant(0.25 * qxz));
+  ml.row(0) = area * (-b2 * myy - b1 * mxy);
+  ml.row(1) = area * (b1 * mxx + b2 * mxy);
   ml.row(2).setZero();
+  if (physical) {
+    fl.row(2).setZero();
+    for (int c = 0; c < 2; ++c) {
+      const RateRows& r = shear_rows[static_cast<std::size_t>(c)];
+      const Real q = area * (c == 0 ? qxz : qyz);
+      fl.row(0) += q * r.vx;
+      fl.row(1) += q * r.vy;
+      fl.row(2) += q * r.vz;
+      ml.row(0) += q * r.tx;
+      ml.row(1) += q * r.ty;
+      ml.row(2) += q * r.tz;
+    }
+  } else {
+    fl.row(2) = area * (b1 * qxz + b2 * qyz);
+    ml.row(0) -= Row4::Constant(0.25 * area * qyz);
+    ml.row(1) += Row4::Constant(0.25 * area * qxz);
+  }
 
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
-  const Row4 tz = wl.row(2);
-  const HourglassRates hg = section_.hourglass_model == HourglassModel::physical
-                                ? physical_hourglass(xh, yh, zh, warped, b1, b2, h, area,
+  const HourglassRates hg = physical
+                                ? physical_hourglass(xh, yh, zh, edges, warped, b1, b2, h, area,
                                                      weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
                                                      weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
@@ -272,6 +303,57 @@ BelytschkoTsayShell::CornerNormals BelytschkoTsayShell::corner_normals(const Row
   return n;
 }
 
+BelytschkoTsayShell::RateRows& BelytschkoTsayShell::RateRows::add(const RateRows& o, Real s) {
+  vx += s * o.vx;
+  vy += s * o.vy;
+  vz += s * o.vz;
+  tx += s * o.tx;
+  ty += s * o.ty;
+  tz += s * o.tz;
+  return *this;
+}
+
+BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh, const Row4& yh, const Row4& zh,
+                                                                  const CornerNormals& n) {
+  constexpr int ends[4][2] = {{0, 1}, {3, 2}, {0, 3}, {1, 2}};
+  EdgeShears out;
+  for (int e = 0; e < 4; ++e) {
+    const int i = ends[e][0], j = ends[e][1];
+    RateRows& g = out[static_cast<std::size_t>(e)];
+    const Vec3 d = 0.5 * (n.col(i) + n.col(j));
+    const Vec3 edge(xh(j) - xh(i), yh(j) - yh(i), zh(j) - zh(i));
+    g.vx(j) = 0.5 * d(0);
+    g.vx(i) = -0.5 * d(0);
+    g.vy(j) = 0.5 * d(1);
+    g.vy(i) = -0.5 * d(1);
+    g.vz(j) = 0.5 * d(2);
+    g.vz(i) = -0.5 * d(2);
+    for (int k : {i, j}) {  // E . (theta x n) = theta . (n x E)
+      const Vec3 c = n.col(k).cross(edge);
+      g.tx(k) = 0.25 * c(0);
+      g.ty(k) = 0.25 * c(1);
+      g.tz(k) = 0.25 * c(2);
+    }
+  }
+  return out;
+}
+
+std::array<BelytschkoTsayShell::RateRows, 2> BelytschkoTsayShell::centre_shear(const EdgeShears& edges, const Row4& xh,
+                                                                               const Row4& yh) {
+  // covariant shears at the centre: gamma_xi = (g_01 + g_32) / 2, gamma_eta = (g_03 + g_12) / 2; Cartesian
+  // (gamma_x, gamma_y) = J^-1 (gamma_xi, gamma_eta), J's rows g_xi, g_eta at the centre
+  RateRows g_xi, g_eta;
+  g_xi.add(edges[0], 0.5).add(edges[1], 0.5);
+  g_eta.add(edges[2], 0.5).add(edges[3], 0.5);
+  const Row4 xi = (Row4() << -1.0, 1.0, 1.0, -1.0).finished(), eta = (Row4() << -1.0, -1.0, 1.0, 1.0).finished();
+  Eigen::Matrix<Real, 2, 2> jac;
+  jac << 0.25 * xi.dot(xh), 0.25 * xi.dot(yh), 0.25 * eta.dot(xh), 0.25 * eta.dot(yh);
+  const Eigen::Matrix<Real, 2, 2> jinv = jac.inverse();
+  std::array<RateRows, 2> out;
+  for (int c = 0; c < 2; ++c) out[static_cast<std::size_t>(c)].add(g_xi, jinv(c, 0)).add(g_eta, jinv(c, 1));
+  return out;
+}
+
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(const Row4& xh, const Row4& yh,
                                                                                const Row4& b1, const Row4& b2, Real h,
                                                                                Real area) const {
@@ -317,22 +399,33 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
 }
 
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh,
-                                                                            bool corrected,
+                                                                            const EdgeShears& edges, bool corrected,
                                                                             const Row4& b1, const Row4& b2, Real h,
                                                                             Real area, Real tangent_membrane,
                                                                             Real tangent_bending) const {
   HourglassRates out;
   const Row4 gamma = hourglass_gamma(xh, yh, b1, b2);  // gamma . u = 4 q for u = q xi eta
   const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
-  // membrane and bending: energy of the bilinear mode's normal strain alone (the parasitic shear of
-  // the bilinear field left out, so pure in-plane / out-of-plane bending is exact on rectangles):
+  // bending: energy of the bilinear mode's normal strain alone (the parasitic shear of the bilinear field
+  // left out, so pure out-of-plane bending is exact on rectangles):
   // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
   const Real bx = b1.squaredNorm(), by = b2.squaredNorm();
   out.tx[0] = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
   out.ty[1] = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
-  out.vx[3] = gamma;
-  out.vy[4] = gamma;
   const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
+  // membrane: the mode u = q xi eta taken along the natural directions g_xi = sum xi_I x_I / 4 and g_eta
+  // (centre), with the normal strain along each alone: e_xi = (q . g_xi) eta / |g_xi|^2, so
+  // (1/2) E t (A / 3) (q . g_xi)^2 / |g_xi|^4 = (1/2) (E t A / (48 |g_xi|^2)) (t_xi . (gamma . u))^2, t_xi = g_xi / |g_xi|.
+  // In-plane bending along xi of any parallelogram stores exactly its bending energy and leaves the eta mode
+  // at rest; the Cartesian x / y modes (the same on rectangles) also strained the y mode of a skewed
+  // element, 117 x the bending energy on a 5:1 element skewed by 0.2 (MacNeal-Harder's straight beam)
+  const Row4 xi = (Row4() << -1.0, 1.0, 1.0, -1.0).finished(), eta = (Row4() << -1.0, -1.0, 1.0, 1.0).finished();
+  const Eigen::Vector2d g_xi(0.25 * xi.dot(xh), 0.25 * xi.dot(yh)), g_eta(0.25 * eta.dot(xh), 0.25 * eta.dot(yh));
+  const Real mem_xi = 0.5 / g_xi.norm(), mem_eta = 0.5 / g_eta.norm();  // play the part of |b1|, |b2|
+  out.vx[3] = g_xi(0) * 2.0 * mem_xi * gamma;
+  out.vy[3] = g_xi(1) * 2.0 * mem_xi * gamma;
+  out.vx[4] = g_eta(0) * 2.0 * mem_eta * gamma;
+  out.vy[4] = g_eta(1) * 2.0 * mem_eta * gamma;
   // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin 1985) edge-tied shears. Covariant
   // shear at the midpoint of edge (I, J), with the bilinear surface's normal n_K at each corner as the
   // director: g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2,
@@ -342,36 +435,22 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // motions and for the Kirchhoff twist w = c x y, on warped facets too (with e3 as every corner's
   // director the twist of a warped facet gave D of order twist x warp, which locked the thin twisted
   // beam); MITC4's shear energy exactly on parallelograms with the centre term below.
-  const CornerNormals n = corner_normals(xh, yh, zh);
-  auto add_edge = [&](int slot, int i, int j, Real s) {
-    const Vec3 d = 0.5 * (n.col(i) + n.col(j));
-    const Vec3 e(xh(j) - xh(i), yh(j) - yh(i), zh(j) - zh(i));
-    out.vx[slot](j) += 0.5 * s * d(0);
-    out.vx[slot](i) -= 0.5 * s * d(0);
-    out.vy[slot](j) += 0.5 * s * d(1);
-    out.vy[slot](i) -= 0.5 * s * d(1);
-    out.vz[slot](j) += 0.5 * s * d(2);
-    out.vz[slot](i) -= 0.5 * s * d(2);
-    for (int k : {i, j}) {
-      const Vec3 c = n.col(k).cross(e);
-      out.tx[slot](k) += 0.25 * s * c(0);
-      out.ty[slot](k) += 0.25 * s * c(1);
-      out.tz[slot](k) += 0.25 * s * c(2);
-    }
+  auto add_difference = [&](int slot, const RateRows& plus, const RateRows& minus) {  // (plus - minus) / 2
+    out.vx[slot] = 0.5 * (plus.vx - minus.vx);
+    out.vy[slot] = 0.5 * (plus.vy - minus.vy);
+    out.vz[slot] = 0.5 * (plus.vz - minus.vz);
+    out.tx[slot] = 0.5 * (plus.tx - minus.tx);
+    out.ty[slot] = 0.5 * (plus.ty - minus.ty);
+    out.tz[slot] = 0.5 * (plus.tz - minus.tz);
   };
-  add_edge(2, 3, 2, 0.5);
-  add_edge(2, 0, 1, -0.5);
-  add_edge(5, 1, 2, 0.5);
-  add_edge(5, 0, 3, -0.5);
+  add_difference(2, edges[1], edges[0]);  // D_xi = (g_32 - g_01) / 2
+  add_difference(5, edges[3], edges[2]);  // D_eta = (g_12 - g_03) / 2
   // the velocities above are the raw ones: with the warping correction the rows act on the corrected
   // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
   if (corrected)
     for (int slot : {2, 5}) out.vz[slot] -= out.vx[slot].dot(zh) * b1 + out.vy[slot].dot(zh) * b2;
-  Row4 xi, eta;
-  xi << -1.0, 1.0, 1.0, -1.0;
-  eta << -1.0, -1.0, 1.0, 1.0;
   Eigen::Matrix<Real, 2, 2> jac;
-  jac << 0.25 * xi.dot(xh), 0.25 * xi.dot(yh), 0.25 * eta.dot(xh), 0.25 * eta.dot(yh);
+  jac << g_xi.transpose(), g_eta.transpose();
   const Eigen::Matrix<Real, 2, 2> jinv = jac.inverse();
   const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
   const Real shear = k * G * h * area / 3.0;
@@ -391,7 +470,12 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // scaled by the material's current tangent ratio (Belytschko-Bindeman: the stabilisation follows the
   // material's response, so it does not stiffen a section that is flowing plastically)
   const Real sm = tangent_membrane, sb = tangent_bending;
-  out.stiffness = {bend * by * sb, bend * bx * sb, shear * c_xi * sm, mem * bx * sm, mem * by * sm, shear * c_eta * sm,
+  out.stiffness = {bend * by * sb,
+                   bend * bx * sb,
+                   shear * c_xi * sm,
+                   mem * mem_xi * mem_xi * sm,
+                   mem * mem_eta * mem_eta * sm,
+                   shear * c_eta * sm,
                    section_.drilling * G * h * area};
   // plastic materials: each mode's resultant is bounded where its peak stress (at the element's edge,
   // the outer fibre) reaches the yield stress, so the stabilisation yields with the material instead of
@@ -402,7 +486,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
     const Real ax = std::sqrt(bx), ay = std::sqrt(by);
     const Real ty_shear = sy / std::sqrt(3.0);
     out.limit = {sy * h * h * area * ay / 36.0, sy * h * h * area * ax / 36.0,
-                 k * h * area / 3.0 * std::sqrt(c_xi) * ty_shear, sy * h * area * ax / 6.0, sy * h * area * ay / 6.0,
+                 k * h * area / 3.0 * std::sqrt(c_xi) * ty_shear, sy * h * area * mem_xi / 6.0, sy * h * area * mem_eta / 6.0,
                  k * h * area / 3.0 * std::sqrt(c_eta) * ty_shear, INFINITY};
   }
   return out;

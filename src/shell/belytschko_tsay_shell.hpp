@@ -5,7 +5,8 @@
 // Kinematics (Mindlin, local frame, seed eqs (17)-(20)): v_x = v_x^m + z theta_y, v_y = v_y^m - z theta_x.
 // Velocity strains (eqs (21)-(24)) at fibre height z:
 //   d_x = B1.vx + z B1.ty,  d_y = B2.vy - z B2.tx,  2d_xy = B2.vx + B1.vy + z (B2.ty - B1.tx),
-//   2d_xz = B1.vz + N.ty,   2d_yz = B2.vz - N.tx      (N_I = 1/4, B = dN/dx at the centre)
+//   2d_xz = B1.vz + N.ty,   2d_yz = B2.vz - N.tx      (N_I = 1/4, B = dN/dx at the centre; the physical
+//   model takes the transverse shear from MITC4's edge shears instead, exact for Kirchhoff fields on any quad)
 // Resultants (eq (28)) over the Lobatto points (eq (29)); nodal forces and moments (eqs (25)-(26)) are
 // the power conjugates of the rates; hourglass resistance (eqs (30)-(36), Belytschko-Tsay 1983 with the
 // Flanagan-Belytschko gamma vectors) in the coefficient model, or the physical stabilisation of
@@ -34,7 +35,9 @@ struct ThroughThicknessRule {
 /// How the element resists its hourglass modes.
 ///  - physical (default): stiffnesses from the material and the element's geometry, no coefficient:
 ///    membrane and bending modes take the bending-exact (ASQBI-type, Belytschko-Bindeman 1993;
-///    Belytschko-Leviathan 1994) stiffness E t A |b_i|^2 / 12 and E t^3 A |b_i|^2 / 144, the transverse
+///    Belytschko-Leviathan 1994) stiffness E t A |b_i|^2 / 12 and E t^3 A |b_i|^2 / 144 (the membrane modes
+///    along the natural directions xi, eta, |b_i| -> 1 / (2 |g_i|): exact in-plane bending of parallelograms),
+///    the centre transverse shear is MITC4's assumed covariant shear at the centre, the transverse
 ///    shear takes the hourglass part of the MITC4 edge-tied shears (two modes, k G t A / 3 each: the
 ///    element is then MITC4's transverse shear exactly on parallelograms), and a Hughes-Brezzi drilling
 ///    penalty ties the nodal drilling rotation to the in-plane rotation. Right on curved (faceted) shells.
@@ -136,13 +139,29 @@ class BelytschkoTsayShell {
   /// all e3 on a flat element.
   using CornerNormals = Eigen::Matrix<Real, 3, 4>;
   static CornerNormals corner_normals(const Row4& xh, const Row4& yh, const Row4& zh);
+  /// A strain rate as rows on the local nodal velocities and angular velocities: rate = vx . v_x + ... + tz . theta_z.
+  struct RateRows {
+    Row4 vx = Row4::Zero(), vy = Row4::Zero(), vz = Row4::Zero(), tx = Row4::Zero(), ty = Row4::Zero(),
+         tz = Row4::Zero();
+    RateRows& add(const RateRows& o, Real s);
+  };
+  /// Covariant transverse shears at the edge midpoints (MITC4, Bathe-Dvorkin 1985), edges 0-1 and 3-2 (along
+  /// xi), 0-3 and 1-2 (along eta), with the bilinear surface's normal n_K at each corner as the director:
+  /// g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2, E = x_J - x_I;
+  /// for an edge along xi, g = g_xi . gamma at its midpoint.
+  using EdgeShears = std::array<RateRows, 4>;
+  static EdgeShears edge_shears(const Row4& xh, const Row4& yh, const Row4& zh, const CornerNormals& n);
+  /// The Cartesian transverse shear rates (2 d_xz, 2 d_yz) at the centre from the MITC4 assumed covariant
+  /// shears (the mean of the two edges along xi and of the two along eta), so that a Kirchhoff field
+  /// (quadratic w, linear rotations) gives no shear on any quadrilateral, trapezoids included.
+  static std::array<RateRows, 2> centre_shear(const EdgeShears& edges, const Row4& xh, const Row4& yh);
   HourglassRates coefficient_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
                                        Real area) const;
   /// tangent_membrane / tangent_bending: the material's current stiffness ratio (1 = elastic);
   /// corrected: the in-plane velocities the rows act on carry the warping correction.
-  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, bool corrected, const Row4& b1,
-                                    const Row4& b2, Real h, Real area, Real tangent_membrane,
-                                    Real tangent_bending) const;
+  HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, const EdgeShears& edges,
+                                    bool corrected, const Row4& b1, const Row4& b2, Real h, Real area,
+                                    Real tangent_membrane, Real tangent_bending) const;
 
   ShellSection section_;
   const material::ShellMaterial& material_;
