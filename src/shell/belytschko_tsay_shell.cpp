@@ -157,9 +157,10 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   const bool physical = section_.hourglass_model == HourglassModel::physical;
   const Row4 tz = wl.row(2);
   const EdgeShears edges = physical ? edge_shears(xh, yh, zh, corner_normals(xh, yh, zh)) : EdgeShears{};
+  const Eigen::Matrix<Real, 2, 2> jacobian = centre_jacobian(xh, yh);
   std::array<RateRows, 2> shear_rows;
   if (physical) {
-    shear_rows = centre_shear(edges, xh, yh);
+    shear_rows = centre_shear(edges, jacobian);
     // the rows act on the raw velocities; with the warping correction v_x, v_y carry + (b . v_z) z
     if (warped)
       for (RateRows& r : shear_rows) r.vz -= r.vx.dot(zh) * b1 + r.vy.dot(zh) * b2;
@@ -240,7 +241,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
 
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
   const HourglassRates hg = physical
-                                ? physical_hourglass(xh, yh, zh, edges, warped, b1, b2, h, area,
+                                ? physical_hourglass(xh, yh, zh, edges, jacobian, warped, b1, b2, h, area,
                                                      weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
                                                      weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
@@ -338,17 +339,21 @@ BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh,
   return out;
 }
 
-std::array<BelytschkoTsayShell::RateRows, 2> BelytschkoTsayShell::centre_shear(const EdgeShears& edges, const Row4& xh,
-                                                                               const Row4& yh) {
+Eigen::Matrix<Real, 2, 2> BelytschkoTsayShell::centre_jacobian(const Row4& xh, const Row4& yh) {
+  const Row4 xi = (Row4() << -1.0, 1.0, 1.0, -1.0).finished(), eta = (Row4() << -1.0, -1.0, 1.0, 1.0).finished();
+  Eigen::Matrix<Real, 2, 2> jac;
+  jac << 0.25 * xi.dot(xh), 0.25 * xi.dot(yh), 0.25 * eta.dot(xh), 0.25 * eta.dot(yh);
+  return jac;
+}
+
+std::array<BelytschkoTsayShell::RateRows, 2> BelytschkoTsayShell::centre_shear(
+    const EdgeShears& edges, const Eigen::Matrix<Real, 2, 2>& jacobian) {
   // covariant shears at the centre: gamma_xi = (g_01 + g_32) / 2, gamma_eta = (g_03 + g_12) / 2; Cartesian
   // (gamma_x, gamma_y) = J^-1 (gamma_xi, gamma_eta), J's rows g_xi, g_eta at the centre
   RateRows g_xi, g_eta;
   g_xi.add(edges[0], 0.5).add(edges[1], 0.5);
   g_eta.add(edges[2], 0.5).add(edges[3], 0.5);
-  const Row4 xi = (Row4() << -1.0, 1.0, 1.0, -1.0).finished(), eta = (Row4() << -1.0, -1.0, 1.0, 1.0).finished();
-  Eigen::Matrix<Real, 2, 2> jac;
-  jac << 0.25 * xi.dot(xh), 0.25 * xi.dot(yh), 0.25 * eta.dot(xh), 0.25 * eta.dot(yh);
-  const Eigen::Matrix<Real, 2, 2> jinv = jac.inverse();
+  const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   std::array<RateRows, 2> out;
   for (int c = 0; c < 2; ++c) out[static_cast<std::size_t>(c)].add(g_xi, jinv(c, 0)).add(g_eta, jinv(c, 1));
   return out;
@@ -399,7 +404,9 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
 }
 
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh,
-                                                                            const EdgeShears& edges, bool corrected,
+                                                                            const EdgeShears& edges,
+                                                                            const Eigen::Matrix<Real, 2, 2>& jacobian,
+                                                                            bool corrected,
                                                                             const Row4& b1, const Row4& b2, Real h,
                                                                             Real area, Real tangent_membrane,
                                                                             Real tangent_bending) const {
@@ -419,13 +426,13 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // In-plane bending along xi of any parallelogram stores exactly its bending energy and leaves the eta mode
   // at rest; the Cartesian x / y modes (the same on rectangles) also strained the y mode of a skewed
   // element, 117 x the bending energy on a 5:1 element skewed by 0.2 (MacNeal-Harder's straight beam)
-  const Row4 xi = (Row4() << -1.0, 1.0, 1.0, -1.0).finished(), eta = (Row4() << -1.0, -1.0, 1.0, 1.0).finished();
-  const Eigen::Vector2d g_xi(0.25 * xi.dot(xh), 0.25 * xi.dot(yh)), g_eta(0.25 * eta.dot(xh), 0.25 * eta.dot(yh));
+  const Eigen::Vector2d g_xi = jacobian.row(0).transpose(), g_eta = jacobian.row(1).transpose();
   const Real mem_xi = 0.5 / g_xi.norm(), mem_eta = 0.5 / g_eta.norm();  // play the part of |b1|, |b2|
-  out.vx[3] = g_xi(0) * 2.0 * mem_xi * gamma;
-  out.vy[3] = g_xi(1) * 2.0 * mem_xi * gamma;
-  out.vx[4] = g_eta(0) * 2.0 * mem_eta * gamma;
-  out.vy[4] = g_eta(1) * 2.0 * mem_eta * gamma;
+  const Eigen::Vector2d t_xi = g_xi / g_xi.norm(), t_eta = g_eta / g_eta.norm();
+  out.vx[3] = t_xi(0) * gamma;
+  out.vy[3] = t_xi(1) * gamma;
+  out.vx[4] = t_eta(0) * gamma;
+  out.vy[4] = t_eta(1) * gamma;
   // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin 1985) edge-tied shears. Covariant
   // shear at the midpoint of edge (I, J), with the bilinear surface's normal n_K at each corner as the
   // director: g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2,
@@ -449,9 +456,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
   if (corrected)
     for (int slot : {2, 5}) out.vz[slot] -= out.vx[slot].dot(zh) * b1 + out.vy[slot].dot(zh) * b2;
-  Eigen::Matrix<Real, 2, 2> jac;
-  jac << g_xi.transpose(), g_eta.transpose();
-  const Eigen::Matrix<Real, 2, 2> jinv = jac.inverse();
+  const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
   const Real shear = k * G * h * area / 3.0;
   // drilling: theta_z (mean) - omega_z, omega_z = (b1 . v'_y - b2 . v'_x) / 2 the in-plane spin of the
