@@ -9,9 +9,12 @@ Run: /usr/bin/python3 validation/mpm_plate_distorted_mesh/make_mesh.py   (writes
 distorted_8x8.msh, distorted_16x16.msh, distorted_32x32.msh)
 """
 import os
+import sys
 import random
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))  # validation/msh22.py
+from msh22 import write_msh22  # noqa: E402
 
 
 def write(name, n, distortion):
@@ -34,16 +37,7 @@ def write(name, n, distortion):
     for j in range(n):
         for i in range(n):
             elements.append((3, 2, (nid(i, j), nid(i + 1, j), nid(i + 1, j + 1), nid(i, j + 1))))
-    with open(os.path.join(HERE, name), "w") as f:
-        f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n")
-        f.write('$PhysicalNames\n2\n1 1 "edge"\n2 2 "plate"\n$EndPhysicalNames\n')
-        f.write(f"$Nodes\n{len(nodes)}\n")
-        for k, (x, y, z) in enumerate(nodes, 1):
-            f.write(f"{k} {x:.15g} {y:.15g} {z:.15g}\n")
-        f.write(f"$EndNodes\n$Elements\n{len(elements)}\n")
-        for k, (etype, phys, conn) in enumerate(elements, 1):
-            f.write(f"{k} {etype} 2 {phys} {phys} " + " ".join(map(str, conn)) + "\n")
-        f.write("$EndElements\n")
+    write_msh22(os.path.join(HERE, name), [(1, 1, "edge"), (2, 2, "plate")], nodes, elements)
     print("wrote", name)
 
 

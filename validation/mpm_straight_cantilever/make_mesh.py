@@ -13,9 +13,12 @@ x = 6) and `beam` (the quadrilaterals, counter-clockwise about +z).
 Run: /usr/bin/python3 validation/mpm_straight_cantilever/make_mesh.py
 """
 import os
+import sys
 
 L, W, N = 6.0, 0.2, 6
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))  # validation/msh22.py
+from msh22 import write_msh22  # noqa: E402
 
 
 def boundary_offset(shape, k):
@@ -39,16 +42,7 @@ def write(shape):
     for k in range(n):
         elements.append((3, 3, (nid(k, 0), nid(k + 1, 0), nid(k + 1, 1), nid(k, 1))))
     name = f"{shape}_{n}x1.msh"
-    with open(os.path.join(HERE, name), "w") as f:
-        f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n")
-        f.write('$PhysicalNames\n3\n1 1 "root"\n1 2 "tip"\n2 3 "beam"\n$EndPhysicalNames\n')
-        f.write(f"$Nodes\n{len(nodes)}\n")
-        for i, (x, y, z) in enumerate(nodes, 1):
-            f.write(f"{i} {x:.15g} {y:.15g} {z:.15g}\n")
-        f.write(f"$EndNodes\n$Elements\n{len(elements)}\n")
-        for i, (etype, phys, conn) in enumerate(elements, 1):
-            f.write(f"{i} {etype} 2 {phys} {phys} " + " ".join(map(str, conn)) + "\n")
-        f.write("$EndElements\n")
+    write_msh22(os.path.join(HERE, name), [(1, 1, "root"), (1, 2, "tip"), (2, 3, "beam")], nodes, elements)
     print("wrote", name)
 
 

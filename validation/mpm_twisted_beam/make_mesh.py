@@ -11,9 +11,12 @@ twisted_48x8.msh)
 """
 import math
 import os
+import sys
 
 L, W = 12.0, 1.1
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))  # validation/msh22.py
+from msh22 import write_msh22  # noqa: E402
 
 
 def write(nl, nw):
@@ -34,16 +37,7 @@ def write(nl, nw):
         for i in range(nw):
             elements.append((3, 3, (nid(i, j), nid(i, j + 1), nid(i + 1, j + 1), nid(i + 1, j))))
     path = os.path.join(HERE, f"twisted_{nl}x{nw}.msh")
-    with open(path, "w") as f:
-        f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n")
-        f.write('$PhysicalNames\n3\n1 1 "root"\n1 2 "tip"\n2 3 "beam"\n$EndPhysicalNames\n')
-        f.write(f"$Nodes\n{len(nodes)}\n")
-        for k, (x, y, z) in enumerate(nodes, 1):
-            f.write(f"{k} {x:.15g} {y:.15g} {z:.15g}\n")
-        f.write(f"$EndNodes\n$Elements\n{len(elements)}\n")
-        for k, (etype, phys, conn) in enumerate(elements, 1):
-            f.write(f"{k} {etype} 2 {phys} {phys} " + " ".join(map(str, conn)) + "\n")
-        f.write("$EndElements\n")
+    write_msh22(path, [(1, 1, "root"), (1, 2, "tip"), (2, 3, "beam")], nodes, elements)
     print("wrote", path)
 
 
