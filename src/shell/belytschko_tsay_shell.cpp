@@ -155,9 +155,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // at the centre (physical model), which leave a Kirchhoff field free on any quadrilateral: the one-point
   // gradient of a quadratic w on a trapezoid misses it by (taper x skew) terms, which locked bending
   const bool physical = section_.hourglass_model == HourglassModel::physical;
-  const Row4 tz = wl.row(2);
   const EdgeShears edges = physical ? edge_shears(xh, yh, zh, corner_normals(xh, yh, zh)) : EdgeShears{};
-  const Eigen::Matrix<Real, 2, 2> jacobian = centre_jacobian(xh, yh);
+  const Eigen::Matrix<Real, 2, 2> jacobian = physical ? centre_jacobian(xh, yh) : Eigen::Matrix<Real, 2, 2>::Zero();
   std::array<RateRows, 2> shear_rows;
   if (physical) {
     shear_rows = centre_shear(edges, jacobian);
@@ -165,11 +164,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     if (warped)
       for (RateRows& r : shear_rows) r.vz -= r.vx.dot(zh) * b1 + r.vy.dot(zh) * b2;
   }
-  auto rate_of = [&](const RateRows& r) {
-    return r.vx.dot(vx) + r.vy.dot(vy) + r.vz.dot(vz) + r.tx.dot(tx) + r.ty.dot(ty) + r.tz.dot(tz);
-  };
-  const Real dxz2 = physical ? rate_of(shear_rows[0]) : b1.dot(vz) + 0.25 * ty.sum();
-  const Real dyz2 = physical ? rate_of(shear_rows[1]) : b2.dot(vz) - 0.25 * tx.sum();
+  const Real dxz2 = physical ? shear_rows[0].rate(vl, wl) : b1.dot(vz) + 0.25 * ty.sum();
+  const Real dyz2 = physical ? shear_rows[1].rate(vl, wl) : b2.dot(vz) - 0.25 * tx.sum();
 
   // stress update through the thickness and resultants (eqs (27)-(29))
   const Real h = thickness;
@@ -223,16 +219,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   ml.row(2).setZero();
   if (physical) {
     fl.row(2).setZero();
-    for (int c = 0; c < 2; ++c) {
-      const RateRows& r = shear_rows[static_cast<std::size_t>(c)];
-      const Real q = area * (c == 0 ? qxz : qyz);
-      fl.row(0) += q * r.vx;
-      fl.row(1) += q * r.vy;
-      fl.row(2) += q * r.vz;
-      ml.row(0) += q * r.tx;
-      ml.row(1) += q * r.ty;
-      ml.row(2) += q * r.tz;
-    }
+    shear_rows[0].add_force(area * qxz, fl, ml);
+    shear_rows[1].add_force(area * qyz, fl, ml);
   } else {
     fl.row(2) = area * (b1 * qxz + b2 * qyz);
     ml.row(0) -= Row4::Constant(0.25 * area * qyz);
@@ -247,18 +235,13 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
   Real hg_power = 0.0;
   for (int i = 0; i < kHourglassSize; ++i) {
-    const Real rate = hg.vx[i].dot(vx) + hg.vy[i].dot(vy) + hg.vz[i].dot(vz) + hg.tx[i].dot(tx) + hg.ty[i].dot(ty) +
-                      hg.tz[i].dot(tz);
+    const RateRows& rows = hg.rows[static_cast<std::size_t>(i)];
+    const Real rate = rows.rate(vl, wl);
     if (hg.stiffness[i] == 0.0 && hourglass[i] == 0.0) continue;  // (a held resultant still acts)
     const Real old = hourglass[i];
     hourglass[i] = std::clamp(hourglass[i] + dt * hg.stiffness[i] * rate, -hg.limit[i], hg.limit[i]);
     hg_power += 0.5 * (old + hourglass[i]) * rate;
-    fl.row(0) += hg.vx[i] * hourglass[i];
-    fl.row(1) += hg.vy[i] * hourglass[i];
-    fl.row(2) += hg.vz[i] * hourglass[i];
-    ml.row(0) += hg.tx[i] * hourglass[i];
-    ml.row(1) += hg.ty[i] * hourglass[i];
-    ml.row(2) += hg.tz[i] * hourglass[i];
+    rows.add_force(hourglass[i], fl, ml);
   }
   out.hourglass_power = hg_power;
 
@@ -312,6 +295,19 @@ BelytschkoTsayShell::RateRows& BelytschkoTsayShell::RateRows::add(const RateRows
   ty += s * o.ty;
   tz += s * o.tz;
   return *this;
+}
+
+Real BelytschkoTsayShell::RateRows::rate(const NodeMatrix& v, const NodeMatrix& w) const {
+  return vx.dot(v.row(0)) + vy.dot(v.row(1)) + vz.dot(v.row(2)) + tx.dot(w.row(0)) + ty.dot(w.row(1)) + tz.dot(w.row(2));
+}
+
+void BelytschkoTsayShell::RateRows::add_force(Real q, NodeMatrix& f, NodeMatrix& m) const {
+  f.row(0) += vx * q;
+  f.row(1) += vy * q;
+  f.row(2) += vz * q;
+  m.row(0) += tx * q;
+  m.row(1) += ty * q;
+  m.row(2) += tz * q;
 }
 
 BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh, const Row4& yh, const Row4& zh,
@@ -392,13 +388,13 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
     cy.array() -= 0.25 * hv.dot(xh);
     cx.array() += 0.25 * hv.dot(yh);
   }
-  out.tx[0] = gamma;
-  out.ty[1] = gamma;
-  out.vz[2] = gamma;
-  out.tx[2] = cx;
-  out.ty[2] = cy;
-  out.vx[3] = gamma;
-  out.vy[4] = gamma;
+  out.rows[0].tx = gamma;
+  out.rows[1].ty = gamma;
+  out.rows[2].vz = gamma;
+  out.rows[2].tx = cx;
+  out.rows[2].ty = cy;
+  out.rows[3].vx = gamma;
+  out.rows[4].vy = gamma;
   out.stiffness = {c_bend, c_bend, c_w, c_mem, c_mem, 0.0, 0.0};
   return out;
 }
@@ -417,8 +413,8 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // left out, so pure out-of-plane bending is exact on rectangles):
   // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
   const Real bx = b1.squaredNorm(), by = b2.squaredNorm();
-  out.tx[0] = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
-  out.ty[1] = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
+  out.rows[0].tx = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
+  out.rows[1].ty = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
   const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
   // membrane: the mode u = q xi eta taken along the natural directions g_xi = sum xi_I x_I / 4 and g_eta
   // (centre), with the normal strain along each alone: e_xi = (q . g_xi) eta / |g_xi|^2, so
@@ -429,10 +425,10 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   const Eigen::Vector2d g_xi = jacobian.row(0).transpose(), g_eta = jacobian.row(1).transpose();
   const Real mem_xi = 0.5 / g_xi.norm(), mem_eta = 0.5 / g_eta.norm();  // play the part of |b1|, |b2|
   const Eigen::Vector2d t_xi = g_xi / g_xi.norm(), t_eta = g_eta / g_eta.norm();
-  out.vx[3] = t_xi(0) * gamma;
-  out.vy[3] = t_xi(1) * gamma;
-  out.vx[4] = t_eta(0) * gamma;
-  out.vy[4] = t_eta(1) * gamma;
+  out.rows[3].vx = t_xi(0) * gamma;
+  out.rows[3].vy = t_xi(1) * gamma;
+  out.rows[4].vx = t_eta(0) * gamma;
+  out.rows[4].vy = t_eta(1) * gamma;
   // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin 1985) edge-tied shears. Covariant
   // shear at the midpoint of edge (I, J), with the bilinear surface's normal n_K at each corner as the
   // director: g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2,
@@ -442,20 +438,12 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // motions and for the Kirchhoff twist w = c x y, on warped facets too (with e3 as every corner's
   // director the twist of a warped facet gave D of order twist x warp, which locked the thin twisted
   // beam); MITC4's shear energy exactly on parallelograms with the centre term below.
-  auto add_difference = [&](int slot, const RateRows& plus, const RateRows& minus) {  // (plus - minus) / 2
-    out.vx[slot] = 0.5 * (plus.vx - minus.vx);
-    out.vy[slot] = 0.5 * (plus.vy - minus.vy);
-    out.vz[slot] = 0.5 * (plus.vz - minus.vz);
-    out.tx[slot] = 0.5 * (plus.tx - minus.tx);
-    out.ty[slot] = 0.5 * (plus.ty - minus.ty);
-    out.tz[slot] = 0.5 * (plus.tz - minus.tz);
-  };
-  add_difference(2, edges[1], edges[0]);  // D_xi = (g_32 - g_01) / 2
-  add_difference(5, edges[3], edges[2]);  // D_eta = (g_12 - g_03) / 2
+  out.rows[2].add(edges[1], 0.5).add(edges[0], -0.5);  // D_xi = (g_32 - g_01) / 2
+  out.rows[5].add(edges[3], 0.5).add(edges[2], -0.5);  // D_eta = (g_12 - g_03) / 2
   // the velocities above are the raw ones: with the warping correction the rows act on the corrected
   // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
   if (corrected)
-    for (int slot : {2, 5}) out.vz[slot] -= out.vx[slot].dot(zh) * b1 + out.vy[slot].dot(zh) * b2;
+    for (int slot : {2, 5}) out.rows[slot].vz -= out.rows[slot].vx.dot(zh) * b1 + out.rows[slot].vy.dot(zh) * b2;
   const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
   const Real shear = k * G * h * area / 3.0;
@@ -466,12 +454,12 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // v_y = raw + (b2 . v_z) z), so that a Kirchhoff bending field of the warped surface gives no drilling
   // strain. The rigid-rotation correction alone left one of order curvature x warp, which a stiff
   // penalty turned into locking
-  out.tx[6] = -0.5 * b1.cwiseProduct(zh);
-  out.ty[6] = -0.5 * b2.cwiseProduct(zh);
-  if (corrected) out.vz[6] = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
-  out.tz[6] = Row4::Constant(0.25);
-  out.vy[6] = -0.5 * b1;
-  out.vx[6] = 0.5 * b2;
+  out.rows[6].tx = -0.5 * b1.cwiseProduct(zh);
+  out.rows[6].ty = -0.5 * b2.cwiseProduct(zh);
+  if (corrected) out.rows[6].vz = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
+  out.rows[6].tz = Row4::Constant(0.25);
+  out.rows[6].vy = -0.5 * b1;
+  out.rows[6].vx = 0.5 * b2;
   // scaled by the material's current tangent ratio (Belytschko-Bindeman: the stabilisation follows the
   // material's response, so it does not stiffen a section that is flowing plastically)
   const Real sm = tangent_membrane, sb = tangent_bending;

@@ -123,28 +123,28 @@ class BelytschkoTsayShell {
 
  private:
   using Row4 = Eigen::Matrix<Real, 1, 4>;
-  /// Hourglass generalised strain rates q_i = vx[i].v_x + ... + tz[i].theta_z (local frame) and the
-  /// stiffness of each (Q_i += dt stiffness_i q_i; the forces are the conjugates Q_i * the rows).
-  struct HourglassRates {
-    std::array<Row4, kHourglassSize> vx, vy, vz, tx, ty, tz;
-    std::array<Real, kHourglassSize> stiffness{};
-    std::array<Real, kHourglassSize> limit;  // |Q_i| bound (the mode's peak stress at the yield stress)
-    HourglassRates() {
-      limit.fill(INFINITY);
-      for (auto* rows : {&vx, &vy, &vz, &tx, &ty, &tz})
-        for (auto& r : *rows) r.setZero();
-    }
-  };
-  /// Unit normals of the element's bilinear surface x(xi, eta) at its corners (local frame, columns);
-  /// all e3 on a flat element.
-  using CornerNormals = Eigen::Matrix<Real, 3, 4>;
-  static CornerNormals corner_normals(const Row4& xh, const Row4& yh, const Row4& zh);
   /// A strain rate as rows on the local nodal velocities and angular velocities: rate = vx . v_x + ... + tz . theta_z.
   struct RateRows {
     Row4 vx = Row4::Zero(), vy = Row4::Zero(), vz = Row4::Zero(), tx = Row4::Zero(), ty = Row4::Zero(),
          tz = Row4::Zero();
     RateRows& add(const RateRows& o, Real s);
+    /// The rate of the local velocities v (rows x, y, z) and angular velocities w.
+    Real rate(const NodeMatrix& v, const NodeMatrix& w) const;
+    /// Its conjugate resultant q into the local nodal forces f and moments m (f += q rows, m += q rows).
+    void add_force(Real q, NodeMatrix& f, NodeMatrix& m) const;
   };
+  /// Hourglass generalised strain rates q_i = rows[i].rate(v, w) (local frame) and the stiffness of each
+  /// (Q_i += dt stiffness_i q_i; the forces are the conjugates Q_i * the rows).
+  struct HourglassRates {
+    std::array<RateRows, kHourglassSize> rows;
+    std::array<Real, kHourglassSize> stiffness{};
+    std::array<Real, kHourglassSize> limit;  // |Q_i| bound (the mode's peak stress at the yield stress)
+    HourglassRates() { limit.fill(INFINITY); }
+  };
+  /// Unit normals of the element's bilinear surface x(xi, eta) at its corners (local frame, columns);
+  /// all e3 on a flat element.
+  using CornerNormals = Eigen::Matrix<Real, 3, 4>;
+  static CornerNormals corner_normals(const Row4& xh, const Row4& yh, const Row4& zh);
   /// Covariant transverse shears at the edge midpoints (MITC4, Bathe-Dvorkin 1985), edges 0-1 and 3-2 (along
   /// xi), 0-3 and 1-2 (along eta), with the bilinear surface's normal n_K at each corner as the director:
   /// g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2, E = x_J - x_I;
