@@ -1,12 +1,13 @@
 #!/usr/bin/python3
 """MPM element-cycle benchmark: a 100 x 100-element Belytschko-Tsay shell plate (CPDI2 domains) in
-explicit dynamics, 200 steps at a fixed time step, on 1 and 2 threads.
+explicit dynamics, 200 steps at a fixed time step, on 1 and 2 threads, with the default shell element
+(physical stabilisation; `--springs`: the seed's coefficient springs, the element measured before 2026-12-07).
 
 Figure: element-cycles per second = elements x steps / (sum of the step's stage times: element
 stresses and forces, P2G, grid update, G2P, gather, position update and grid re-binning, loads);
 the time per stage is printed too. Set-up (mesh, grid, masses) is not included.
 
-Usage: bench/mpm_plate_cycles.py [--lamina build/lamina] [--elements 100] [--steps 200] [--threads 1 2]
+Usage: bench/mpm_plate_cycles.py [--lamina build/lamina] [--elements 100] [--steps 200] [--threads 1 2] [--springs]
 Ends with one `BENCH <name> <value> <unit>` line per figure.
 """
 import argparse
@@ -18,9 +19,11 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def plate_case(elements_x, elements_y, steps, dt):
+def plate_case(elements_x, elements_y, steps, dt, springs=False):
     """The benchmark plate: elements_x x elements_y Belytschko-Tsay elements of 0.01 x 0.01 x 0.01, clamped
-    at x = 0, a linear initial velocity, `steps` explicit steps of dt."""
+    at x = 0, a linear initial velocity, `steps` explicit steps of dt. The default shell element (physical
+    stabilisation); springs=True: the seed's coefficient springs (shell.hourglass 0.1) instead."""
+    hourglass = ", hourglass: 0.1" if springs else ""
     return f"""title: MPM plate for the element-cycle benchmarks
 method: mpm
 materials: [{{name: p, model: linear_elastic, E: 1.0e6, nu: 0.3, density: 1.0}}]
@@ -28,7 +31,7 @@ geometry: {{type: plate, min: [0, 0], max: [{elements_x / 100}, {elements_y / 10
 discretization: {{elements: [{elements_x}, {elements_y}]}}
 boundary: [{{select: {{set: xmin}}, fix: [x, y, z, rx, ry, rz]}}]
 loads: [{{select: all, initial_velocity: [0, 0, "0.1*x"]}}]
-shell: {{thickness_points: 3, hourglass: 0.1}}
+shell: {{thickness_points: 3{hourglass}}}
 mpm: {{analysis: dynamic, end_time: {steps * dt}, output_points: 1, time_step: {{fixed: {dt}}}}}
 output: {{vtu: false}}
 """
@@ -40,12 +43,14 @@ def main():
     parser.add_argument("--elements", type=int, default=100)
     parser.add_argument("--steps", type=int, default=200)
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--springs", action="store_true",
+                        help="the seed's coefficient springs (shell.hourglass: 0.1) instead of the default element")
     args = parser.parse_args()
     dt = 1.0e-6  # below the shell's stable step for 0.01 x 0.01 x 0.01 elements, E = 1e6, rho = 1
     workdir = tempfile.mkdtemp(prefix="lamina_bench_mpm_")
     case = os.path.join(workdir, "plate.yaml")
     with open(case, "w") as f:
-        f.write(plate_case(args.elements, args.elements, args.steps, dt))
+        f.write(plate_case(args.elements, args.elements, args.steps, dt, args.springs))
     elements = args.elements ** 2
     bench = []
     for threads in args.threads:

@@ -119,8 +119,11 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // local coordinates (origin at the centroid), velocities, angular velocities (eq (17))
   const Vec3 centre = x.rowwise().mean();
   const NodeMatrix xl = R * (x.colwise() - centre);
-  NodeMatrix vl = R * v;
-  const NodeMatrix wl = R * omega;
+  NodeMotion vw;
+  vw.topRows<3>() = R * v;
+  vw.bottomRows<3>() = R * omega;
+  auto vl = vw.topRows<3>();
+  const auto wl = vw.bottomRows<3>();
   const Row4 xh = xl.row(0), yh = xl.row(1), zh = xl.row(2);
 
   const Real area2 = (xh(2) - xh(0)) * (yh(3) - yh(1)) + (xh(1) - xh(3)) * (yh(2) - yh(0));
@@ -162,10 +165,10 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     shear_rows = centre_shear(edges, jacobian);
     // the rows act on the raw velocities; with the warping correction v_x, v_y carry + (b . v_z) z
     if (warped)
-      for (RateRows& r : shear_rows) r.vz -= r.vx.dot(zh) * b1 + r.vy.dot(zh) * b2;
+      for (RateRows& r : shear_rows) r.vz() -= r.vx().dot(zh) * b1 + r.vy().dot(zh) * b2;
   }
-  const Real dxz2 = physical ? shear_rows[0].rate(vl, wl) : b1.dot(vz) + 0.25 * ty.sum();
-  const Real dyz2 = physical ? shear_rows[1].rate(vl, wl) : b2.dot(vz) - 0.25 * tx.sum();
+  const Real dxz2 = physical ? shear_rows[0].rate(vw) : b1.dot(vz) + 0.25 * ty.sum();
+  const Real dyz2 = physical ? shear_rows[1].rate(vw) : b2.dot(vz) - 0.25 * tx.sum();
 
   // stress update through the thickness and resultants (eqs (27)-(29))
   const Real h = thickness;
@@ -211,7 +214,9 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   out.internal_power = power * area;
 
   // nodal forces and moments: power conjugates of the rates (eqs (25)-(26))
-  NodeMatrix fl, ml;
+  NodeMotion fm;
+  auto fl = fm.topRows<3>();
+  auto ml = fm.bottomRows<3>();
   fl.row(0) = area * (b1 * nxx + b2 * nxy);
   fl.row(1) = area * (b2 * nyy + b1 * nxy);
   ml.row(0) = area * (-b2 * myy - b1 * mxy);
@@ -219,8 +224,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   ml.row(2).setZero();
   if (physical) {
     fl.row(2).setZero();
-    shear_rows[0].add_force(area * qxz, fl, ml);
-    shear_rows[1].add_force(area * qyz, fl, ml);
+    shear_rows[0].add_force(area * qxz, fm);
+    shear_rows[1].add_force(area * qyz, fm);
   } else {
     fl.row(2) = area * (b1 * qxz + b2 * qyz);
     ml.row(0) -= Row4::Constant(0.25 * area * qyz);
@@ -236,12 +241,12 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   Real hg_power = 0.0;
   for (int i = 0; i < kHourglassSize; ++i) {
     const RateRows& rows = hg.rows[static_cast<std::size_t>(i)];
-    const Real rate = rows.rate(vl, wl);
+    const Real rate = rows.rate(vw);
     if (hg.stiffness[i] == 0.0 && hourglass[i] == 0.0) continue;  // (a held resultant still acts)
     const Real old = hourglass[i];
     hourglass[i] = std::clamp(hourglass[i] + dt * hg.stiffness[i] * rate, -hg.limit[i], hg.limit[i]);
     hg_power += 0.5 * (old + hourglass[i]) * rate;
-    rows.add_force(hourglass[i], fl, ml);
+    rows.add_force(hourglass[i], fm);
   }
   out.hourglass_power = hg_power;
 
@@ -273,41 +278,16 @@ Eigen::Matrix<Real, 1, 4> hourglass_gamma(const Eigen::Matrix<Real, 1, 4>& xh, c
 }  // namespace
 
 BelytschkoTsayShell::CornerNormals BelytschkoTsayShell::corner_normals(const Row4& xh, const Row4& yh, const Row4& zh) {
+  // x(xi, eta) = c + xi a + eta b + xi eta g with a = sum xi_J x_J / 4, b = sum eta_J x_J / 4,
+  // g = sum xi_J eta_J x_J / 4; at corner k, x_,xi = a + eta_k g and x_,eta = b + xi_k g
   const Real xi[4] = {-1.0, 1.0, 1.0, -1.0}, eta[4] = {-1.0, -1.0, 1.0, 1.0};
+  const Row4 rxi = (Row4() << -0.25, 0.25, 0.25, -0.25).finished(), reta = (Row4() << -0.25, -0.25, 0.25, 0.25).finished();
+  const Row4 rg = (Row4() << 0.25, -0.25, 0.25, -0.25).finished();
+  const Vec3 a(rxi.dot(xh), rxi.dot(yh), rxi.dot(zh)), b(reta.dot(xh), reta.dot(yh), reta.dot(zh));
+  const Vec3 g(rg.dot(xh), rg.dot(yh), rg.dot(zh));
   CornerNormals n;
-  for (int k = 0; k < 4; ++k) {  // a_xi x a_eta of x(xi, eta) = sum_J N_J(xi, eta) x_J at corner k
-    Vec3 a_xi = Vec3::Zero(), a_eta = Vec3::Zero();
-    for (int j = 0; j < 4; ++j) {
-      const Vec3 xj(xh(j), yh(j), zh(j));
-      a_xi += 0.25 * xi[j] * (1.0 + eta[j] * eta[k]) * xj;
-      a_eta += 0.25 * eta[j] * (1.0 + xi[j] * xi[k]) * xj;
-    }
-    n.col(k) = a_xi.cross(a_eta).normalized();
-  }
+  for (int k = 0; k < 4; ++k) n.col(k) = (a + eta[k] * g).cross(b + xi[k] * g).normalized();
   return n;
-}
-
-BelytschkoTsayShell::RateRows& BelytschkoTsayShell::RateRows::add(const RateRows& o, Real s) {
-  vx += s * o.vx;
-  vy += s * o.vy;
-  vz += s * o.vz;
-  tx += s * o.tx;
-  ty += s * o.ty;
-  tz += s * o.tz;
-  return *this;
-}
-
-Real BelytschkoTsayShell::RateRows::rate(const NodeMatrix& v, const NodeMatrix& w) const {
-  return vx.dot(v.row(0)) + vy.dot(v.row(1)) + vz.dot(v.row(2)) + tx.dot(w.row(0)) + ty.dot(w.row(1)) + tz.dot(w.row(2));
-}
-
-void BelytschkoTsayShell::RateRows::add_force(Real q, NodeMatrix& f, NodeMatrix& m) const {
-  f.row(0) += vx * q;
-  f.row(1) += vy * q;
-  f.row(2) += vz * q;
-  m.row(0) += tx * q;
-  m.row(1) += ty * q;
-  m.row(2) += tz * q;
 }
 
 BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh, const Row4& yh, const Row4& zh,
@@ -319,18 +299,9 @@ BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh,
     RateRows& g = out[static_cast<std::size_t>(e)];
     const Vec3 d = 0.5 * (n.col(i) + n.col(j));
     const Vec3 edge(xh(j) - xh(i), yh(j) - yh(i), zh(j) - zh(i));
-    g.vx(j) = 0.5 * d(0);
-    g.vx(i) = -0.5 * d(0);
-    g.vy(j) = 0.5 * d(1);
-    g.vy(i) = -0.5 * d(1);
-    g.vz(j) = 0.5 * d(2);
-    g.vz(i) = -0.5 * d(2);
-    for (int k : {i, j}) {  // E . (theta x n) = theta . (n x E)
-      const Vec3 c = n.col(k).cross(edge);
-      g.tx(k) = 0.25 * c(0);
-      g.ty(k) = 0.25 * c(1);
-      g.tz(k) = 0.25 * c(2);
-    }
+    g.m.col(j).head<3>() = 0.5 * d;
+    g.m.col(i).head<3>() = -0.5 * d;
+    for (int k : {i, j}) g.m.col(k).tail<3>() = 0.25 * n.col(k).cross(edge);  // E . (theta x n) = theta . (n x E)
   }
   return out;
 }
@@ -388,13 +359,13 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
     cy.array() -= 0.25 * hv.dot(xh);
     cx.array() += 0.25 * hv.dot(yh);
   }
-  out.rows[0].tx = gamma;
-  out.rows[1].ty = gamma;
-  out.rows[2].vz = gamma;
-  out.rows[2].tx = cx;
-  out.rows[2].ty = cy;
-  out.rows[3].vx = gamma;
-  out.rows[4].vy = gamma;
+  out.rows[0].tx() = gamma;
+  out.rows[1].ty() = gamma;
+  out.rows[2].vz() = gamma;
+  out.rows[2].tx() = cx;
+  out.rows[2].ty() = cy;
+  out.rows[3].vx() = gamma;
+  out.rows[4].vy() = gamma;
   out.stiffness = {c_bend, c_bend, c_w, c_mem, c_mem, 0.0, 0.0};
   return out;
 }
@@ -413,8 +384,8 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // left out, so pure out-of-plane bending is exact on rectangles):
   // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
   const Real bx = b1.squaredNorm(), by = b2.squaredNorm();
-  out.rows[0].tx = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
-  out.rows[1].ty = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
+  out.rows[0].tx() = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
+  out.rows[1].ty() = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
   const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
   // membrane: the mode u = q xi eta taken along the natural directions g_xi = sum xi_I x_I / 4 and g_eta
   // (centre), with the normal strain along each alone: e_xi = (q . g_xi) eta / |g_xi|^2, so
@@ -425,10 +396,10 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   const Eigen::Vector2d g_xi = jacobian.row(0).transpose(), g_eta = jacobian.row(1).transpose();
   const Real mem_xi = 0.5 / g_xi.norm(), mem_eta = 0.5 / g_eta.norm();  // play the part of |b1|, |b2|
   const Eigen::Vector2d t_xi = g_xi / g_xi.norm(), t_eta = g_eta / g_eta.norm();
-  out.rows[3].vx = t_xi(0) * gamma;
-  out.rows[3].vy = t_xi(1) * gamma;
-  out.rows[4].vx = t_eta(0) * gamma;
-  out.rows[4].vy = t_eta(1) * gamma;
+  out.rows[3].vx() = t_xi(0) * gamma;
+  out.rows[3].vy() = t_xi(1) * gamma;
+  out.rows[4].vx() = t_eta(0) * gamma;
+  out.rows[4].vy() = t_eta(1) * gamma;
   // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin 1985) edge-tied shears. Covariant
   // shear at the midpoint of edge (I, J), with the bilinear surface's normal n_K at each corner as the
   // director: g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2,
@@ -443,7 +414,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // the velocities above are the raw ones: with the warping correction the rows act on the corrected
   // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
   if (corrected)
-    for (int slot : {2, 5}) out.rows[slot].vz -= out.rows[slot].vx.dot(zh) * b1 + out.rows[slot].vy.dot(zh) * b2;
+    for (int slot : {2, 5}) out.rows[slot].vz() -= out.rows[slot].vx().dot(zh) * b1 + out.rows[slot].vy().dot(zh) * b2;
   const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
   const Real shear = k * G * h * area / 3.0;
@@ -454,12 +425,12 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // v_y = raw + (b2 . v_z) z), so that a Kirchhoff bending field of the warped surface gives no drilling
   // strain. The rigid-rotation correction alone left one of order curvature x warp, which a stiff
   // penalty turned into locking
-  out.rows[6].tx = -0.5 * b1.cwiseProduct(zh);
-  out.rows[6].ty = -0.5 * b2.cwiseProduct(zh);
-  if (corrected) out.rows[6].vz = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
-  out.rows[6].tz = Row4::Constant(0.25);
-  out.rows[6].vy = -0.5 * b1;
-  out.rows[6].vx = 0.5 * b2;
+  out.rows[6].tx() = -0.5 * b1.cwiseProduct(zh);
+  out.rows[6].ty() = -0.5 * b2.cwiseProduct(zh);
+  if (corrected) out.rows[6].vz() = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
+  out.rows[6].tz() = Row4::Constant(0.25);
+  out.rows[6].vy() = -0.5 * b1;
+  out.rows[6].vx() = 0.5 * b2;
   // scaled by the material's current tangent ratio (Belytschko-Bindeman: the stabilisation follows the
   // material's response, so it does not stiffen a section that is flowing plastically)
   const Real sm = tangent_membrane, sb = tangent_bending;

@@ -123,15 +123,29 @@ class BelytschkoTsayShell {
 
  private:
   using Row4 = Eigen::Matrix<Real, 1, 4>;
-  /// A strain rate as rows on the local nodal velocities and angular velocities: rate = vx . v_x + ... + tz . theta_z.
+  /// The local nodal velocities (rows 0-2) over the angular velocities (rows 3-5), one column per node; also
+  /// the local nodal forces over the moments.
+  using NodeMotion = Eigen::Matrix<Real, 6, 4>;
+  /// A strain rate as rows on the local nodal velocities and angular velocities: rate = vx . v_x + ... + tz . theta_z,
+  /// held as one 6 x 4 block laid out as NodeMotion (so rate and force are one vectorised product each).
   struct RateRows {
-    Row4 vx = Row4::Zero(), vy = Row4::Zero(), vz = Row4::Zero(), tx = Row4::Zero(), ty = Row4::Zero(),
-         tz = Row4::Zero();
-    RateRows& add(const RateRows& o, Real s);
-    /// The rate of the local velocities v (rows x, y, z) and angular velocities w.
-    Real rate(const NodeMatrix& v, const NodeMatrix& w) const;
-    /// Its conjugate resultant q into the local nodal forces f and moments m (f += q rows, m += q rows).
-    void add_force(Real q, NodeMatrix& f, NodeMatrix& m) const;
+    NodeMotion m = NodeMotion::Zero();
+    auto vx() { return m.row(0); }
+    auto vy() { return m.row(1); }
+    auto vz() { return m.row(2); }
+    auto tx() { return m.row(3); }
+    auto ty() { return m.row(4); }
+    auto tz() { return m.row(5); }
+    auto vx() const { return m.row(0); }
+    auto vy() const { return m.row(1); }
+    RateRows& add(const RateRows& o, Real s) {
+      m += s * o.m;
+      return *this;
+    }
+    /// The rate of the local motion vw (velocities over angular velocities).
+    Real rate(const NodeMotion& vw) const { return m.cwiseProduct(vw).sum(); }
+    /// Its conjugate resultant q into the local nodal forces over moments fm (fm += q rows).
+    void add_force(Real q, NodeMotion& fm) const { fm += q * m; }
   };
   /// Hourglass generalised strain rates q_i = rows[i].rate(v, w) (local frame) and the stiffness of each
   /// (Q_i += dt stiffness_i q_i; the forces are the conjugates Q_i * the rows).
