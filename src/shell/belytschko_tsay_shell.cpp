@@ -292,16 +292,16 @@ BelytschkoTsayShell::CornerNormals BelytschkoTsayShell::corner_normals(const Row
 
 BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh, const Row4& yh, const Row4& zh,
                                                                   const CornerNormals& n) {
-  constexpr int ends[4][2] = {{0, 1}, {3, 2}, {0, 3}, {1, 2}};
+  constexpr int ends[4][2] = {{0, 1}, {3, 2}, {0, 3}, {1, 2}};  // edges along xi (0-1, 3-2), then along eta
   EdgeShears out;
   for (int e = 0; e < 4; ++e) {
     const int i = ends[e][0], j = ends[e][1];
-    RateRows& g = out[static_cast<std::size_t>(e)];
+    NodeMotion& g = e < 2 ? out.xi.m : out.eta.m;
     const Vec3 d = 0.5 * (n.col(i) + n.col(j));
     const Vec3 edge(xh(j) - xh(i), yh(j) - yh(i), zh(j) - zh(i));
-    g.m.col(j).head<3>() = 0.5 * d;
-    g.m.col(i).head<3>() = -0.5 * d;
-    for (int k : {i, j}) g.m.col(k).tail<3>() = 0.25 * n.col(k).cross(edge);  // E . (theta x n) = theta . (n x E)
+    g.col(j).head<3>() = 0.5 * d;
+    g.col(i).head<3>() = -0.5 * d;
+    for (int k : {i, j}) g.col(k).tail<3>() = 0.25 * n.col(k).cross(edge);  // E . (theta x n) = theta . (n x E)
   }
   return out;
 }
@@ -317,12 +317,9 @@ std::array<BelytschkoTsayShell::RateRows, 2> BelytschkoTsayShell::centre_shear(
     const EdgeShears& edges, const Eigen::Matrix<Real, 2, 2>& jacobian) {
   // covariant shears at the centre: gamma_xi = (g_01 + g_32) / 2, gamma_eta = (g_03 + g_12) / 2; Cartesian
   // (gamma_x, gamma_y) = J^-1 (gamma_xi, gamma_eta), J's rows g_xi, g_eta at the centre
-  RateRows g_xi, g_eta;
-  g_xi.add(edges[0], 0.5).add(edges[1], 0.5);
-  g_eta.add(edges[2], 0.5).add(edges[3], 0.5);
   const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   std::array<RateRows, 2> out;
-  for (int c = 0; c < 2; ++c) out[static_cast<std::size_t>(c)].add(g_xi, jinv(c, 0)).add(g_eta, jinv(c, 1));
+  for (int c = 0; c < 2; ++c) out[static_cast<std::size_t>(c)].m = 0.5 * jinv(c, 0) * edges.xi.m + 0.5 * jinv(c, 1) * edges.eta.m;
   return out;
 }
 
@@ -331,6 +328,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
                                                                                Real area) const {
   // Belytschko-Tsay 1983 springs with the Flanagan-Belytschko gamma vectors (seed eqs (30)-(36))
   HourglassRates out;
+  for (RateRows& r : out.rows) r = RateRows::zero();
   const Real r = section_.hourglass;
   const Real r_bend = section_.hourglass_bending >= 0.0 ? section_.hourglass_bending : r;
   const Real r_mem = section_.hourglass_membrane >= 0.0 ? section_.hourglass_membrane : r;
@@ -384,6 +382,8 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // left out, so pure out-of-plane bending is exact on rectangles):
   // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
   const Real bx = b1.squaredNorm(), by = b2.squaredNorm();
+  out.rows[0] = RateRows::zero();
+  out.rows[1] = RateRows::zero();
   out.rows[0].tx() = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
   out.rows[1].ty() = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
   const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
@@ -400,6 +400,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   out.rows[3].vy() = t_xi(1) * gamma;
   out.rows[4].vx() = t_eta(0) * gamma;
   out.rows[4].vy() = t_eta(1) * gamma;
+  for (int slot : {3, 4}) out.rows[slot].vz().setZero(), out.rows[slot].tz().setZero();
   // on a warped facet the modes read the in-plane motion of the nodes' projections on the facet, v less the
   // motion of the offset z_I by the node's own rotation (v'_x = v_x - theta_y z_I, v'_y = v_y + theta_x z_I,
   // as the drilling strain below; the rows act on the rigid-rotation corrected velocities, so that
@@ -408,8 +409,8 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   const Row4 gz = gamma.cwiseProduct(zh);
   for (int slot : {3, 4}) {
     const Eigen::Vector2d& t = slot == 3 ? t_xi : t_eta;
-    out.rows[slot].ty() -= t(0) * gz;
-    out.rows[slot].tx() += t(1) * gz;
+    out.rows[slot].ty() = -t(0) * gz;
+    out.rows[slot].tx() = t(1) * gz;
     if (corrected) out.rows[slot].vz() -= gz.sum() * (t(0) * b1 + t(1) * b2);
   }
   // transverse shear: the hourglass part of the MITC4 (Bathe-Dvorkin 1985) edge-tied shears. Covariant
@@ -421,8 +422,9 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // motions and for the Kirchhoff twist w = c x y, on warped facets too (with e3 as every corner's
   // director the twist of a warped facet gave D of order twist x warp, which locked the thin twisted
   // beam); MITC4's shear energy exactly on parallelograms with the centre term below.
-  out.rows[2].add(edges[1], 0.5).add(edges[0], -0.5);  // D_xi = (g_32 - g_01) / 2
-  out.rows[5].add(edges[3], 0.5).add(edges[2], -0.5);  // D_eta = (g_12 - g_03) / 2
+  // D_xi = (g_32 - g_01) / 2, D_eta = (g_12 - g_03) / 2: the edge blocks with the first edge's nodes negated
+  out.rows[2].m = edges.xi.m * Row4(-0.5, -0.5, 0.5, 0.5).asDiagonal();
+  out.rows[5].m = edges.eta.m * Row4(-0.5, 0.5, 0.5, -0.5).asDiagonal();
   // the velocities above are the raw ones: with the warping correction the rows act on the corrected
   // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
   if (corrected)
@@ -439,7 +441,10 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // penalty turned into locking
   out.rows[6].tx() = -0.5 * b1.cwiseProduct(zh);
   out.rows[6].ty() = -0.5 * b2.cwiseProduct(zh);
-  if (corrected) out.rows[6].vz() = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
+  if (corrected)
+    out.rows[6].vz() = 0.5 * (b1.dot(zh) * b2 - b2.dot(zh) * b1);
+  else
+    out.rows[6].vz().setZero();
   out.rows[6].tz() = Row4::Constant(0.25);
   out.rows[6].vy() = -0.5 * b1;
   out.rows[6].vx() = 0.5 * b2;

@@ -129,7 +129,12 @@ class BelytschkoTsayShell {
   /// A strain rate as rows on the local nodal velocities and angular velocities: rate = vx . v_x + ... + tz . theta_z,
   /// held as one 6 x 4 block laid out as NodeMotion (so rate and force are one vectorised product each).
   struct RateRows {
-    NodeMotion m = NodeMotion::Zero();
+    NodeMotion m;  // (not initialised: zero() or a full assignment; small zero fills cost a string store each)
+    static RateRows zero() {
+      RateRows r;
+      r.m.setZero();
+      return r;
+    }
     auto vx() { return m.row(0); }
     auto vy() { return m.row(1); }
     auto vz() { return m.row(2); }
@@ -159,11 +164,14 @@ class BelytschkoTsayShell {
   /// all e3 on a flat element.
   using CornerNormals = Eigen::Matrix<Real, 3, 4>;
   static CornerNormals corner_normals(const Row4& xh, const Row4& yh, const Row4& zh);
-  /// Covariant transverse shears at the edge midpoints (MITC4, Bathe-Dvorkin 1985), edges 0-1 and 3-2 (along
-  /// xi), 0-3 and 1-2 (along eta), with the bilinear surface's normal n_K at each corner as the director:
-  /// g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2, d = (n_I + n_J) / 2, E = x_J - x_I;
-  /// for an edge along xi, g = g_xi . gamma at its midpoint.
-  using EdgeShears = std::array<RateRows, 4>;
+  /// Covariant transverse shears at the edge midpoints (MITC4, Bathe-Dvorkin 1985), with the bilinear surface's
+  /// normal n_K at each corner as the director: g = [(v_J - v_I) . d + E . (theta_I x n_I + theta_J x n_J) / 2] / 2,
+  /// d = (n_I + n_J) / 2, E = x_J - x_I; for an edge along xi, g = g_xi . gamma at its midpoint. Every node lies
+  /// on one edge along xi (0-1 or 3-2) and one along eta (0-3 or 1-2), so the rows of the two xi edges fill one
+  /// NodeMotion block (column K: node K's part of its edge's rate) and those of the two eta edges another.
+  struct EdgeShears {
+    RateRows xi, eta;
+  };
   static EdgeShears edge_shears(const Row4& xh, const Row4& yh, const Row4& zh, const CornerNormals& n);
   /// The Cartesian transverse shear rates (2 d_xz, 2 d_yz) at the centre from the MITC4 assumed covariant
   /// shears (the mean of the two edges along xi and of the two along eta), so that a Kirchhoff field
