@@ -20,19 +20,12 @@ Real ShellMaterial::dilatational_wave_speed() const {
 }
 
 LinearElasticShellMaterial::LinearElasticShellMaterial(Real young, Real poisson, Real density)
-    : young_(young), poisson_(poisson), density_(density) {}
-
-Real LinearElasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
-  const LinearElastic elastic{young_, poisson_};
-  const Real c = elastic.plane_stress_modulus();
-  const Real g = elastic.mu();
-  sigma[0] += dt * c * (rate[0] + poisson_ * rate[1]);
-  sigma[1] += dt * c * (rate[1] + poisson_ * rate[0]);
-  sigma[2] += dt * g * rate[2];
-  sigma[3] += dt * g * rate[3];
-  sigma[4] += dt * g * rate[4];
-  return -poisson_ / (1.0 - poisson_) * (rate[0] + rate[1]);
-}
+    : young_(young),
+      poisson_(poisson),
+      density_(density),
+      plane_stress_(LinearElastic{young, poisson}.plane_stress_modulus()),
+      shear_(LinearElastic{young, poisson}.mu()),
+      thickness_ratio_(-poisson / (1.0 - poisson)) {}
 
 NeoHookeanShellMaterial::NeoHookeanShellMaterial(Real young, Real poisson, Real density)
     : young_(young),

@@ -44,13 +44,23 @@ class ShellMaterial {
 class LinearElasticShellMaterial final : public ShellMaterial {
  public:
   LinearElasticShellMaterial(Real young, Real poisson, Real density);
-  Real update(Real* sigma, const Real* rate, Real dt) const override;
+  Real update(Real* sigma, const Real* rate, Real dt) const override { return advance(sigma, rate, dt); }
+  /// The update, non-virtual and inline (the element's fast path for this material).
+  Real advance(Real* sigma, const Real* rate, Real dt) const {
+    sigma[0] += dt * plane_stress_ * (rate[0] + poisson_ * rate[1]);
+    sigma[1] += dt * plane_stress_ * (rate[1] + poisson_ * rate[0]);
+    sigma[2] += dt * shear_ * rate[2];
+    sigma[3] += dt * shear_ * rate[3];
+    sigma[4] += dt * shear_ * rate[4];
+    return thickness_ratio_ * (rate[0] + rate[1]);
+  }
   Real young_modulus() const override { return young_; }
   Real poisson_ratio() const override { return poisson_; }
   Real density() const override { return density_; }
 
  private:
   Real young_, poisson_, density_;
+  Real plane_stress_, shear_, thickness_ratio_;  // E / (1 - nu^2), mu, -nu / (1 - nu): from LinearElastic, once
 };
 
 /// Compressible neo-Hookean plane stress in the corotational frame (PRODUCT.md / notes: hyperelastic

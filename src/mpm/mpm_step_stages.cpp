@@ -137,23 +137,23 @@ void MpmAnalysis::stage_grid_update() {
   Eigen::Matrix3Xd &grid_velocity = grid_velocity_, &grid_acceleration = grid_acceleration_;
   grid_velocity.resize(3, grid_mass.cols());
   grid_acceleration.resize(3, grid_mass.cols());
-  const Index slots = grid_mass.cols();
-#pragma omp parallel for schedule(static) if (slots > 4096)
-  for (Index s = 0; s < slots; ++s)
-    for (int a = 0; a < 3; ++a) {
-      const Real m = grid_mass(a, s);
-      if (m > 0) {
-        if (central_damping) {
-          grid_velocity(a, s) = (keep * grid_momentum(a, s) + dt * grid_force(a, s)) / (divide * m);
-          grid_acceleration(a, s) = (grid_velocity(a, s) - grid_momentum(a, s) / m) / dt;
-        } else {
-          grid_acceleration(a, s) = grid_force(a, s) / m;
-          grid_velocity(a, s) = (grid_momentum(a, s) + dt * grid_force(a, s)) / m;
-        }
-      } else {
-        grid_acceleration(a, s) = grid_velocity(a, s) = 0.0;  // no free mass: fixed grid node (eq (7))
-      }
+  // one reciprocal per component (a division costs as much as the rest of the loop); the flat loop has
+  // no branch, so it vectorises: a component without free mass gets zero velocity and acceleration
+  const Index entries = 3 * grid_mass.cols();
+  const Real *mass = grid_mass.data(), *momentum = grid_momentum.data(), *force = grid_force.data();
+  Real *velocity = grid_velocity.data(), *acceleration = grid_acceleration.data();
+#pragma omp parallel for simd schedule(static) if (entries > 12288)
+  for (Index s = 0; s < entries; ++s) {
+    const Real m = mass[s];
+    const Real inverse = m > 0 ? 1.0 / m : 0.0;
+    if (central_damping) {
+      velocity[s] = (keep * momentum[s] + dt * force[s]) * (inverse / divide);
+      acceleration[s] = (velocity[s] - momentum[s] * inverse) / dt;
+    } else {
+      acceleration[s] = force[s] * inverse;
+      velocity[s] = (momentum[s] + dt * force[s]) * inverse;
     }
+  }
 }
 
 // 6. G2P velocities (eq (8), PIC blended with FLIP by options.flip); rotations integrated at the nodes;

@@ -47,7 +47,10 @@ ThroughThicknessRule ThroughThicknessRule::lobatto(int n) {
 }
 
 BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const material::ShellMaterial& material)
-    : section_(section), material_(material), rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
+    : section_(section),
+      material_(material),
+      linear_elastic_(dynamic_cast<const material::LinearElasticShellMaterial*>(&material)),
+      rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
 
 bool BelytschkoTsayShell::corotational_frame(const NodeMatrix& x, Mat3& rotation) {
   const Vec3 r31 = x.col(2) - x.col(0), r42 = x.col(3) - x.col(1);
@@ -189,7 +192,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
     Real* s = stress + stride * q;
     Real old[material::kStressComponents];
     std::copy(s, s + material::kStressComponents, old);
-    dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * material_.update(s, rate, dt);
+    const Real dzz = linear_elastic_ ? linear_elastic_->advance(s, rate, dt) : material_.update(s, rate, dt);
+    dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * dzz;
     if (plastic) {
       const Real t0 = Ep * (rate[0] + nu * rate[1]) * dt, t1 = Ep * (rate[1] + nu * rate[0]) * dt, t2 = Gm * rate[2] * dt;
       const Real trial = t0 * t0 + t1 * t1 + 2.0 * t2 * t2;
@@ -286,8 +290,9 @@ BelytschkoTsayShell::CornerNormals BelytschkoTsayShell::corner_normals(const Row
   const Vec3 a(rxi.dot(xh), rxi.dot(yh), rxi.dot(zh)), b(reta.dot(xh), reta.dot(yh), reta.dot(zh));
   const Vec3 g(rg.dot(xh), rg.dot(yh), rg.dot(zh));
   CornerNormals n;
-  for (int k = 0; k < 4; ++k) n.col(k) = (a + eta[k] * g).cross(b + xi[k] * g).normalized();
-  return n;
+  for (int k = 0; k < 4; ++k) n.col(k) = (a + eta[k] * g).cross(b + xi[k] * g);
+  const Row4 inverse_length = n.colwise().squaredNorm().cwiseSqrt().cwiseInverse();  // (four at once)
+  return n * inverse_length.asDiagonal();
 }
 
 BelytschkoTsayShell::EdgeShears BelytschkoTsayShell::edge_shears(const Row4& xh, const Row4& yh, const Row4& zh,

@@ -189,6 +189,7 @@ class BelytschkoTsayShell {
 
   ShellSection section_;
   const material::ShellMaterial& material_;
+  const material::LinearElasticShellMaterial* linear_elastic_;  // the material if it is linear elastic (inline update)
   ThroughThicknessRule rule_;
 };
 
