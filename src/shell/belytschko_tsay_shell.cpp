@@ -50,6 +50,12 @@ BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const mate
     : section_(section),
       material_(material),
       linear_elastic_(dynamic_cast<const material::LinearElasticShellMaterial*>(&material)),
+      young_(material.young_modulus()),
+      poisson_(material.poisson_ratio()),
+      shear_(material.shear_modulus()),
+      plane_stress_(material::LinearElastic{young_, poisson_}.plane_stress_modulus()),
+      stress_limit_(material.stress_limit()),
+      plastic_(material.is_plastic()),
       rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
 
 bool BelytschkoTsayShell::corotational_frame(const NodeMatrix& x, Mat3& rotation) {
@@ -180,9 +186,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   Real power = 0.0, dzz_mean = 0.0;
   // plastic materials: how much of an elastic stress increment the material took at each point
   // (|d sigma| / |d sigma_trial|), averaged over the section for the membrane and z^2-weighted for bending
-  const bool plastic = material_.is_plastic();
-  const Real E = material_.young_modulus(), nu = material_.poisson_ratio(), Gm = material_.shear_modulus();
-  const Real Ep = material::LinearElastic{E, nu}.plane_stress_modulus();
+  const bool plastic = plastic_;
+  const Real nu = poisson_, Gm = shear_, Ep = plane_stress_;
   Real tangent_membrane = 0.0, tangent_bending = 0.0, weight_membrane = 0.0, weight_bending = 0.0;
   const Real k = section_.shear_factor;
   for (int q = 0; q < nq; ++q) {
@@ -341,7 +346,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
   const Row4 hv = hourglass_vector();
   const Row4 gamma = hourglass_gamma(xh, yh, b1, b2);
   const Real bsq = b1.squaredNorm() + b2.squaredNorm();
-  const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
+  const Real E = young_, G = shear_, k = section_.shear_factor;
   const Real c_bend = r_bend * E * h * h * h * area / 192.0 * bsq;
   const Real c_w = r_w * k * G * h * h * h / 12.0 * bsq;
   const Real c_mem = r_mem * E * h * area / 8.0 * bsq;
@@ -382,7 +387,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
                                                                             Real tangent_bending) const {
   HourglassRates out;
   const Row4 gamma = hourglass_gamma(xh, yh, b1, b2);  // gamma . u = 4 q for u = q xi eta
-  const Real E = material_.young_modulus(), G = material_.shear_modulus(), k = section_.shear_factor;
+  const Real E = young_, G = shear_, k = section_.shear_factor;
   // bending: energy of the bilinear mode's normal strain alone (the parasitic shear of the bilinear field
   // left out, so pure out-of-plane bending is exact on rectangles):
   // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
@@ -399,8 +404,9 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // at rest; the Cartesian x / y modes (the same on rectangles) also strained the y mode of a skewed
   // element, 117 x the bending energy on a 5:1 element skewed by 0.2 (MacNeal-Harder's straight beam)
   const Eigen::Vector2d g_xi = jacobian.row(0).transpose(), g_eta = jacobian.row(1).transpose();
-  const Real mem_xi = 0.5 / g_xi.norm(), mem_eta = 0.5 / g_eta.norm();  // play the part of |b1|, |b2|
-  const Eigen::Vector2d t_xi = g_xi / g_xi.norm(), t_eta = g_eta / g_eta.norm();
+  const Real length_xi = g_xi.norm(), length_eta = g_eta.norm();
+  const Real mem_xi = 0.5 / length_xi, mem_eta = 0.5 / length_eta;  // play the part of |b1|, |b2|
+  const Eigen::Vector2d t_xi = g_xi / length_xi, t_eta = g_eta / length_eta;
   out.rows[3].vx() = t_xi(0) * gamma;
   out.rows[3].vy() = t_xi(1) * gamma;
   out.rows[4].vx() = t_eta(0) * gamma;
@@ -467,7 +473,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // the outer fibre) reaches the yield stress, so the stabilisation yields with the material instead of
   // stiffening plastic folds: Q = (t A |b| / 6) sigma_peak (membrane), (t^2 A |b| / 36) sigma_peak
   // (bending), (k t A / 3) |J^-T e| tau_peak with tau = sigma_y / sqrt(3) (transverse shear)
-  const Real sy = material_.stress_limit();
+  const Real sy = stress_limit_;
   if (std::isfinite(sy)) {
     const Real ax = std::sqrt(bx), ay = std::sqrt(by);
     const Real ty_shear = sy / std::sqrt(3.0);
