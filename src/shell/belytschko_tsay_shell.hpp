@@ -143,10 +143,6 @@ class BelytschkoTsayShell {
     auto tz() { return m.row(5); }
     auto vx() const { return m.row(0); }
     auto vy() const { return m.row(1); }
-    RateRows& add(const RateRows& o, Real s) {
-      m += s * o.m;
-      return *this;
-    }
     /// The rate of the local motion vw (velocities over angular velocities).
     Real rate(const NodeMotion& vw) const { return m.cwiseProduct(vw).sum(); }
     /// Its conjugate resultant q into the local nodal forces over moments fm (fm += q rows).
