@@ -329,7 +329,8 @@ std::array<BelytschkoTsayShell::RateRows, 2> BelytschkoTsayShell::centre_shear(
   // (gamma_x, gamma_y) = J^-1 (gamma_xi, gamma_eta), J's rows g_xi, g_eta at the centre
   const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   std::array<RateRows, 2> out;
-  for (int c = 0; c < 2; ++c) out[static_cast<std::size_t>(c)].m = 0.5 * jinv(c, 0) * edges.xi.m + 0.5 * jinv(c, 1) * edges.eta.m;
+  for (int c = 0; c < 2; ++c)
+    out[static_cast<std::size_t>(c)].m = 0.5 * jinv(c, 0) * edges.xi.m + 0.5 * jinv(c, 1) * edges.eta.m;
   return out;
 }
 
