@@ -169,9 +169,10 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   const bool physical = section_.hourglass_model == HourglassModel::physical;
   const EdgeShears edges = physical ? edge_shears(xh, yh, zh, corner_normals(xh, yh, zh)) : EdgeShears{};
   const Eigen::Matrix<Real, 2, 2> jacobian = physical ? centre_jacobian(xh, yh) : Eigen::Matrix<Real, 2, 2>::Zero();
+  const Eigen::Matrix<Real, 2, 2> jacobian_inverse = physical ? jacobian.inverse() : jacobian;  // (once, for both uses)
   std::array<RateRows, 2> shear_rows;
   if (physical) {
-    shear_rows = centre_shear(edges, jacobian);
+    shear_rows = centre_shear(edges, jacobian_inverse);
     // the rows act on the raw velocities; with the warping correction v_x, v_y carry + (b . v_z) z
     if (warped)
       for (RateRows& r : shear_rows) r.vz() -= r.vx().dot(zh) * b1 + r.vy().dot(zh) * b2;
@@ -243,7 +244,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
 
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
   const HourglassRates hg = physical
-                                ? physical_hourglass(xh, yh, zh, edges, jacobian, warped, b1, b2, h, area,
+                                ? physical_hourglass(xh, yh, zh, edges, jacobian, jacobian_inverse, warped, b1, b2, h, area,
                                                      weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
                                                      weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
@@ -324,10 +325,9 @@ Eigen::Matrix<Real, 2, 2> BelytschkoTsayShell::centre_jacobian(const Row4& xh, c
 }
 
 std::array<BelytschkoTsayShell::RateRows, 2> BelytschkoTsayShell::centre_shear(
-    const EdgeShears& edges, const Eigen::Matrix<Real, 2, 2>& jacobian) {
+    const EdgeShears& edges, const Eigen::Matrix<Real, 2, 2>& jinv) {
   // covariant shears at the centre: gamma_xi = (g_01 + g_32) / 2, gamma_eta = (g_03 + g_12) / 2; Cartesian
   // (gamma_x, gamma_y) = J^-1 (gamma_xi, gamma_eta), J's rows g_xi, g_eta at the centre
-  const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   std::array<RateRows, 2> out;
   for (int c = 0; c < 2; ++c)
     out[static_cast<std::size_t>(c)].m = 0.5 * jinv(c, 0) * edges.xi.m + 0.5 * jinv(c, 1) * edges.eta.m;
@@ -382,6 +382,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::coefficient_hourglass(c
 BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh,
                                                                             const EdgeShears& edges,
                                                                             const Eigen::Matrix<Real, 2, 2>& jacobian,
+                                                                            const Eigen::Matrix<Real, 2, 2>& jinv,
                                                                             bool corrected,
                                                                             const Row4& b1, const Row4& b2, Real h,
                                                                             Real area, Real tangent_membrane,
@@ -441,7 +442,6 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // v_x = raw + (b1 . v_z) z, v_y = raw + (b2 . v_z) z, so the correction is taken out through the v_z rows
   if (corrected)
     for (int slot : {2, 5}) out.rows[slot].vz() -= out.rows[slot].vx().dot(zh) * b1 + out.rows[slot].vy().dot(zh) * b2;
-  const Eigen::Matrix<Real, 2, 2> jinv = jacobian.inverse();
   const Real c_xi = jinv.col(0).squaredNorm(), c_eta = jinv.col(1).squaredNorm();
   const Real shear = k * G * h * area / 3.0;
   // drilling: theta_z (mean) - omega_z, omega_z = (b1 . v'_y - b2 . v'_x) / 2 the in-plane spin of the

@@ -172,7 +172,8 @@ class BelytschkoTsayShell {
   /// The Cartesian transverse shear rates (2 d_xz, 2 d_yz) at the centre from the MITC4 assumed covariant
   /// shears (the mean of the two edges along xi and of the two along eta), so that a Kirchhoff field
   /// (quadratic w, linear rotations) gives no shear on any quadrilateral, trapezoids included.
-  static std::array<RateRows, 2> centre_shear(const EdgeShears& edges, const Eigen::Matrix<Real, 2, 2>& jacobian);
+  /// jinv: the inverse of centre_jacobian.
+  static std::array<RateRows, 2> centre_shear(const EdgeShears& edges, const Eigen::Matrix<Real, 2, 2>& jinv);
   /// The bilinear map's natural basis at the centre as the rows of J: g_xi = sum xi_I x_I / 4, g_eta.
   static Eigen::Matrix<Real, 2, 2> centre_jacobian(const Row4& xh, const Row4& yh);
   HourglassRates coefficient_hourglass(const Row4& xh, const Row4& yh, const Row4& b1, const Row4& b2, Real h,
@@ -180,7 +181,8 @@ class BelytschkoTsayShell {
   /// tangent_membrane / tangent_bending: the material's current stiffness ratio (1 = elastic);
   /// corrected: the in-plane velocities the rows act on carry the warping correction.
   HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, const EdgeShears& edges,
-                                    const Eigen::Matrix<Real, 2, 2>& jacobian, bool corrected, const Row4& b1, const Row4& b2, Real h, Real area,
+                                    const Eigen::Matrix<Real, 2, 2>& jacobian, const Eigen::Matrix<Real, 2, 2>& jinv,
+                                    bool corrected, const Row4& b1, const Row4& b2, Real h, Real area,
                                     Real tangent_membrane, Real tangent_bending) const;
 
   ShellSection section_;
