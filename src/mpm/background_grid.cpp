@@ -78,34 +78,42 @@ bool BackgroundGrid::locate(const PointMatrix& x, const std::vector<char>* inclu
   if (!finite) check_range(x);  // throws
   if (!changed) return false;
   // (key, entry) pairs of the located corners in sorted order (unique pairs: the order is deterministic).
-  // After the first sort only the entries of corners that changed cell (or joined) are re-sorted and
-  // merged into the rest; those of corners that left are dropped.
-  kept_.clear();
+  // After the first sort only the entries of corners that changed cell (or joined) are sorted and merged
+  // into the rest, whose pairs are compacted in place (those of corners that moved or left dropped).
   moved_.clear();
-  if (!resized)
-    for (const auto& ke : key_entry_)
-      if (!corner_moved_[static_cast<std::size_t>(ke.second / kNodesPerCorner)]) kept_.push_back(ke);
   for (Index c = 0; c < n; ++c)
     if ((resized || corner_moved_[static_cast<std::size_t>(c)]) && cell_of_corner_[static_cast<std::size_t>(c)] != kNotLocated)
       for (Index e = c * kNodesPerCorner; e < (c + 1) * kNodesPerCorner; ++e) moved_.emplace_back(key_of_entry_[static_cast<std::size_t>(e)], e);
   std::sort(moved_.begin(), moved_.end());
-  key_entry_.resize(kept_.size() + moved_.size());
-  std::merge(kept_.begin(), kept_.end(), moved_.begin(), moved_.end(), key_entry_.begin());
+  if (resized) {
+    key_entry_.swap(moved_);
+  } else {
+    const auto kept_end = std::remove_if(key_entry_.begin(), key_entry_.end(), [&](const std::pair<std::int64_t, Index>& ke) {
+      return corner_moved_[static_cast<std::size_t>(ke.second / kNodesPerCorner)] != 0;
+    });
+    merged_.resize(static_cast<std::size_t>(kept_end - key_entry_.begin()) + moved_.size());
+    std::merge(key_entry_.begin(), kept_end, moved_.begin(), moved_.end(), merged_.begin());
+    key_entry_.swap(merged_);
+  }
+  // slots: one per distinct key, in key order; one pass over the sorted pairs
   const std::size_t located = key_entry_.size();
   sorted_entries_.resize(located);
-  for (std::size_t e = 0; e < located; ++e) sorted_entries_[e] = key_entry_[e].second;
-  slot_begin_.clear();
-  slot_key_.clear();
+  slot_begin_.resize(located + 1);
+  slot_key_.resize(located);
+  std::size_t slots = 0;
   for (std::size_t s = 0; s < located; ++s) {
-    const Index entry = sorted_entries_[s];
-    const auto key = key_entry_[s].first;
-    if (slot_key_.empty() || slot_key_.back() != key) {
-      slot_key_.push_back(key);
-      slot_begin_.push_back(static_cast<Index>(s));
+    const auto& [key, entry] = key_entry_[s];
+    sorted_entries_[s] = entry;
+    if (slots == 0 || slot_key_[slots - 1] != key) {
+      slot_key_[slots] = key;
+      slot_begin_[slots] = static_cast<Index>(s);
+      ++slots;
     }
-    slot_of_entry_[static_cast<std::size_t>(entry)] = static_cast<Index>(slot_key_.size()) - 1;
+    slot_of_entry_[static_cast<std::size_t>(entry)] = static_cast<Index>(slots) - 1;
   }
-  slot_begin_.push_back(static_cast<Index>(located));
+  slot_key_.resize(slots);
+  slot_begin_.resize(slots + 1);
+  slot_begin_[slots] = static_cast<Index>(located);
   ++connectivity_version_;
   return true;
 }
@@ -132,21 +140,11 @@ void BackgroundGrid::scatter_mass_momentum_force(const Eigen::VectorXd& mass, co
   grid_mass.resize(3, active);
   grid_momentum.resize(3, active);
   grid_force.resize(3, active);
-#pragma omp parallel for schedule(static) if (active > 4096)
-  for (Index s = 0; s < active; ++s) {
-    Vec3 m = Vec3::Zero(), p = Vec3::Zero(), f = Vec3::Zero();
-    for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
-      const Index c = *e / kNodesPerCorner;
-      const Real w = weight_[static_cast<std::size_t>(*e)];
-      const Vec3 free = mask.col(c);
-      m += w * (Vec3::Constant(mass[c])).cwiseProduct(free);
-      p += w * (mass[c] * velocity.col(c)).cwiseProduct(free);
-      f += w * force.col(c).cwiseProduct(free);
-    }
+  scatter_and_finish(mass, velocity, force, mask, [&](Index s, const Vec3& m, const Vec3& p, const Vec3& f) {
     grid_mass.col(s) = m;
     grid_momentum.col(s) = p;
     grid_force.col(s) = f;
-  }
+  });
 }
 
 bool BackgroundGrid::covers(const Vec3& lowest, const Vec3& highest) const {

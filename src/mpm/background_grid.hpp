@@ -51,6 +51,49 @@ class BackgroundGrid {
                                    const Eigen::Matrix3Xd& mask, Eigen::Matrix3Xd& grid_mass, Eigen::Matrix3Xd& grid_momentum,
                                    Eigen::Matrix3Xd& grid_force) const;
 
+  /// P2G with the grid update in the same pass: for every slot, the sums m_I, p_I, f_I of
+  /// scatter_mass_momentum_force (Vec3 each, per free component) are handed to finish(slot, m, p, f),
+  /// which turns them into the slot's grid values while they are in registers (no grid arrays of mass,
+  /// momentum and force are written and read back). Threads split the slots; results do not depend on
+  /// the thread count.
+  template <class Finish>
+  void scatter_and_finish(const Eigen::VectorXd& mass, const PointMatrix& velocity, const PointMatrix& force,
+                          const Eigen::Matrix3Xd& mask, Finish&& finish) const {
+    const Index active = active_nodes();
+#pragma omp parallel for schedule(static) if (active > 4096)
+    for (Index s = 0; s < active; ++s) {
+      Vec3 m = Vec3::Zero(), p = Vec3::Zero(), f = Vec3::Zero();
+      for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
+        const Index c = *e / kNodesPerCorner;
+        const Real w = weight_[static_cast<std::size_t>(*e)];
+        const Vec3 free = mask.col(c);
+        m += w * (Vec3::Constant(mass[c])).cwiseProduct(free);
+        p += w * (mass[c] * velocity.col(c)).cwiseProduct(free);
+        f += w * force.col(c).cwiseProduct(free);
+      }
+      finish(s, m, p, f);
+    }
+  }
+
+  /// G2P of two grid arrays in one pass over the corners [first, last): a_c = sum_I S_I(x_c) a_I and
+  /// b_c likewise are handed to finish(c, a_c, b_c) (no corner arrays written and read back). Threads
+  /// split the corners.
+  template <class Finish>
+  void gather_and_finish(const Eigen::Matrix3Xd& grid_a, const Eigen::Matrix3Xd& grid_b, Index first, Index last,
+                         Finish&& finish) const {
+#pragma omp parallel for schedule(static) if (last - first > 1024)
+    for (Index c = first; c < last; ++c) {
+      Vec3 a = Vec3::Zero(), b = Vec3::Zero();
+      for (int k = 0; k < kNodesPerCorner; ++k) {
+        const Real w = weight(c, k);
+        const Index s = slot(c, k);
+        a += w * grid_a.col(s);
+        b += w * grid_b.col(s);
+      }
+      finish(c, a, b);
+    }
+  }
+
   /// Counts the connectivity rebuilds of locate().
   Index connectivity_version() const { return connectivity_version_; }
   /// Throws AnalysisError when a corner of x is non-finite or outside the grid's index range (the
@@ -70,7 +113,7 @@ class BackgroundGrid {
   std::vector<Index> slot_of_entry_;
   std::vector<Index> sorted_entries_;
   std::vector<std::pair<std::int64_t, Index>> key_entry_;  // (cell key, entry), sorted
-  std::vector<std::pair<std::int64_t, Index>> kept_, moved_;  // scratch of locate()'s re-sort
+  std::vector<std::pair<std::int64_t, Index>> moved_, merged_;  // scratch of locate()'s re-sort
   std::vector<char> corner_moved_;                            // corner changed cell in this locate()
   std::vector<Index> slot_begin_{0};
   Index connectivity_version_ = 0;

@@ -15,9 +15,9 @@
 //               dt = 1 with mass scaling (Gershgorin bound).
 //  loads        external loads at the load factor / time, damping forces, the residual ratio.
 //  p2g          (eqs (1)-(4)) grid mass, momentum and force m_I = sum_c S_I(x_c) m_c, ... (each free
-//               component separately, so a fixed component of a node adds nothing to the grid).
-//  grid         (eqs (5)-(7)) v_I = (p_I + dt f_I) / m_I (central adaptive damping: seed 002 eq (7));
-//               grid nodes without free mass stay at rest.
+//               component separately, so a fixed component of a node adds nothing to the grid), and in
+//               the same pass over the grid nodes the grid update (eqs (5)-(7)) v_I = (p_I + dt f_I) / m_I
+//               (central adaptive damping: seed 002 eq (7)); grid nodes without free mass stay at rest.
 //  g2p          (eq (8)) v_c = sum_I S_I(x_c) v_I (PIC) blended with the FLIP update v_c + dt sum_I S_I a_I
 //               (options.flip; default 0 = PIC); rotations integrated at the nodes, omega += dt (m_ext -
 //               m_int) / I; prescribed components imposed at the nodes.
@@ -149,7 +149,6 @@ class MpmAnalysis : public Analysis {
   void stage_time_step();
   void stage_loads_and_residual();
   void stage_particle_to_grid();
-  void stage_grid_update();
   void stage_grid_to_particle();
   void stage_damping_and_energy();
   void stage_position_update();
@@ -186,8 +185,7 @@ class MpmAnalysis : public Analysis {
   Eigen::Matrix3Xd free_, rotation_free_;  // 1 = free, 0 = prescribed (per component)
   Eigen::Matrix3Xd f_int_, m_int_, f_ext_, m_ext_, f_net_;
   // per-step work arrays, kept to avoid re-allocating them every step
-  Eigen::Matrix3Xd m_net_, grid_mass_, grid_momentum_, grid_force_, grid_velocity_, grid_acceleration_;
-  PointMatrix v_pic_, a_grid_;
+  Eigen::Matrix3Xd m_net_, grid_velocity_, grid_acceleration_;
   std::vector<Index> incidence_begin_, incidence_;  // node -> element * 4 + corner
 
   struct PreparedLoad {

@@ -23,7 +23,6 @@ std::vector<StepStage> MpmAnalysis::step_stages(bool mass_scaled) {
   stages.insert(stages.end(), {{"time_step", [this] { stage_time_step(); }},
                                {"loads", [this] { stage_loads_and_residual(); }},
                                {"p2g", [this] { stage_particle_to_grid(); }},
-                               {"grid", [this] { stage_grid_update(); }},
                                {"g2p", [this] { stage_grid_to_particle(); }},
                                {"damping", [this] { stage_damping_and_energy(); }},
                                {"update", [this] { stage_position_update(); }}});
@@ -121,61 +120,52 @@ void MpmAnalysis::stage_loads_and_residual() {
   }
 }
 
-// 4. P2G: mass, momentum and force per free component (eqs (1)-(4); work arrays are members, reused
-// across steps: no per-step allocation).
+// 4. P2G and the grid update in one pass over the grid's slots (eqs (1)-(7)): mass, momentum and force
+// per free component summed from the corners, then v_I = (p_I + dt f_I) / m_I and a_I = f_I / m_I (central
+// adaptive damping: seed 002 eq (7)) while the sums are in registers; grid nodes without free mass stay at
+// rest. (One pass instead of two: the grid has about 8 slots per shell node at the default cell of half
+// an element edge, and the sums' three arrays written and read back cost more than the update itself.)
 void MpmAnalysis::stage_particle_to_grid() {
-  // several ranks: every grid node of the rank's grid; those the block's nodes touch get the whole sum
-  // (every rank holds every node's mass, velocity and force; the grid holds the nodes near the block)
-  grid_.scatter_mass_momentum_force(dyn_mass_, v_, f_net_, free_, grid_mass_, grid_momentum_, grid_force_);
-}
-
-// 5. grid update (eqs (5)-(7)); grid nodes without free mass stay at rest.
-void MpmAnalysis::stage_grid_update() {
   const Real dt = step_.dt, keep = step_.keep, divide = step_.divide;
   const bool central_damping = step_.central_damping;
-  const Eigen::Matrix3Xd &grid_mass = grid_mass_, &grid_momentum = grid_momentum_, &grid_force = grid_force_;
+  const Index active = grid_.active_nodes();
   Eigen::Matrix3Xd &grid_velocity = grid_velocity_, &grid_acceleration = grid_acceleration_;
-  grid_velocity.resize(3, grid_mass.cols());
-  grid_acceleration.resize(3, grid_mass.cols());
-  // one reciprocal per component (a division costs as much as the rest of the loop); the flat loop has
-  // no branch, so it vectorises: a component without free mass gets zero velocity and acceleration
-  const Index entries = 3 * grid_mass.cols();
-  const Real *mass = grid_mass.data(), *momentum = grid_momentum.data(), *force = grid_force.data();
-  Real *velocity = grid_velocity.data(), *acceleration = grid_acceleration.data();
-#pragma omp parallel for simd schedule(static) if (entries > 12288)
-  for (Index s = 0; s < entries; ++s) {
-    const Real m = mass[s];
-    const Real inverse = m > 0 ? 1.0 / m : 0.0;
+  grid_velocity.resize(3, active);
+  grid_acceleration.resize(3, active);
+  // several ranks: every grid node of the rank's grid; those the block's nodes touch get the whole sum
+  // (every rank holds every node's mass, velocity and force; the grid holds the nodes near the block)
+  grid_.scatter_and_finish(dyn_mass_, v_, f_net_, free_, [&](Index s, const Vec3& m, const Vec3& p, const Vec3& f) {
+    // 1 / m where there is free mass, 0 where there is none (masses are >= 0), without a branch
+    const Eigen::Array3d has_mass = (m.array() > 0).cast<Real>();
+    const Eigen::Array3d inverse = has_mass / (m.array() + (1.0 - has_mass));
     if (central_damping) {
-      velocity[s] = (keep * momentum[s] + dt * force[s]) * (inverse / divide);
-      acceleration[s] = (velocity[s] - momentum[s] * inverse) / dt;
+      const Eigen::Array3d v = (keep * p.array() + dt * f.array()) * (inverse / divide);
+      grid_velocity.col(s) = v.matrix();
+      grid_acceleration.col(s) = ((v - p.array() * inverse) / dt).matrix();
     } else {
-      acceleration[s] = force[s] * inverse;
-      velocity[s] = (momentum[s] + dt * force[s]) * inverse;
+      grid_acceleration.col(s) = (f.array() * inverse).matrix();
+      grid_velocity.col(s) = ((p.array() + dt * f.array()) * inverse).matrix();
     }
-  }
+  });
 }
 
-// 6. G2P velocities (eq (8), PIC blended with FLIP by options.flip); rotations integrated at the nodes;
+// 5. G2P velocities (eq (8), PIC blended with FLIP by options.flip); rotations integrated at the nodes;
 // prescribed components imposed.
 void MpmAnalysis::stage_grid_to_particle() {
   const Index n = x_.cols();
   const Real dt = step_.dt, keep = step_.keep, divide = step_.divide;
   const bool central_damping = step_.central_damping;
   const Eigen::Matrix3Xd& m_net = m_net_;
-  PointMatrix &v_pic = v_pic_, &a_grid = a_grid_;
-  grid_.gather(grid_velocity_, v_pic, node_first_, node_last_);  // this rank's nodes (all on one process)
-  grid_.gather(grid_acceleration_, a_grid, node_first_, node_last_);
   const Real flip = problem_.options.flip;
   transfer_loss_.setZero(n);
-#pragma omp parallel for schedule(static) if (node_last_ - node_first_ > 1024)
-  for (Index i = node_first_; i < node_last_; ++i) {
+  // this rank's nodes (all on one process): grid velocity (PIC) and acceleration at the node, then its update
+  grid_.gather_and_finish(grid_velocity_, grid_acceleration_, node_first_, node_last_, [&](Index i, const Vec3& v_pic, const Vec3& a_grid) {
     for (int a = 0; a < 3; ++a) {
       if (free_(a, i) > 0) {
-        const Real v_flip = v_(a, i) + dt * a_grid(a, i);
-        v_(a, i) = flip * v_flip + (1.0 - flip) * v_pic(a, i);
+        const Real v_flip = v_(a, i) + dt * a_grid[a];
+        v_(a, i) = flip * v_flip + (1.0 - flip) * v_pic[a];
         transfer_loss_[i] += 0.5 * dyn_mass_[i] * (v_flip * v_flip - v_(a, i) * v_(a, i));
-        vpos_(a, i) = v_pic(a, i);
+        vpos_(a, i) = v_pic[a];
       } else {
         v_(a, i) = vpos_(a, i) = 0.0;
       }
@@ -184,7 +174,7 @@ void MpmAnalysis::stage_grid_to_particle() {
       else
         omega_(a, i) = rotation_free_(a, i) > 0 ? omega_(a, i) + dt * m_net(a, i) / dyn_inertia_[i] : 0.0;
     }
-  }
+  });
   // several ranks: every node's position velocity on every rank (the positions stay whole everywhere),
   // the halo's velocities and rotation rates (P2G and the elements of the block)
   gather_node_blocks({{vpos_.data(), 3}});
@@ -192,7 +182,7 @@ void MpmAnalysis::stage_grid_to_particle() {
   apply_prescribed(current_load_);
 }
 
-// 7. damping bookkeeping, kinetic-energy damping, external work, kinetic and transfer energies.
+// 6. damping bookkeeping, kinetic-energy damping, external work, kinetic and transfer energies.
 void MpmAnalysis::stage_damping_and_energy() {
   const MpmOptions& o = problem_.options;
   const Index n = x_.cols();
@@ -230,7 +220,7 @@ void MpmAnalysis::stage_damping_and_energy() {
   energy_.transfer += transfer;
 }
 
-// 8. positions (eq (9)) and grid connectivity; a non-finite energy stops the run.
+// 7. positions (eq (9)) and grid connectivity; a non-finite energy stops the run.
 void MpmAnalysis::stage_position_update() {
   x_ += step_.dt * vpos_;
   if (scaled_) theta_ += step_.dt * omega_;
