@@ -65,8 +65,12 @@ MpmAnalysis::MpmAnalysis(MpmProblem problem, std::vector<Probe> probes, const pa
     throw InputError("discretization.grid.cell", fmt::format("a grid cell above 1e-3 x the shortest element edge ({:.4g})",
                                                              1e-3 * domains.shortest_edge()),
                      fmt::format("{:.4g}", cell));
+  // origin half a cell off the nodes' lower bound: the nodes of a regular mesh (a plate in a coordinate
+  // plane, a mesh whose spacing is a multiple of the cell) then sit mid-cell instead of on cell faces,
+  // where round-off motion (1e-16 in a direction nothing moves) flipped them between cells and rebuilt
+  // the grid's connectivity at almost every step
   const Vec3 lower = mesh.nodes.rowwise().minCoeff();
-  grid_ = BackgroundGrid(lower - Vec3::Constant(cell), cell);
+  grid_ = BackgroundGrid(lower - Vec3::Constant(1.5 * cell), cell);
 
   material_ = material::make_shell_material(problem_.material);
   element_ = std::make_unique<shell::BelytschkoTsayShell>(problem_.section, *material_);

@@ -59,17 +59,18 @@ BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const mate
       rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
 
 bool BelytschkoTsayShell::corotational_frame(const NodeMatrix& x, Mat3& rotation) {
-  const Vec3 r31 = x.col(2) - x.col(0), r42 = x.col(3) - x.col(1);
-  Vec3 e3 = r31.cross(r42);
-  const Real n3 = e3.norm();
+  // e3 along r31 x r42, e1 along r21 less its e3 part, e2 = e3 x e1. The e3 part is taken out with the
+  // unnormalised normal (r21 - (r21 . n / n . n) n), so that the two square roots are independent and
+  // overlap instead of forming one long dependency chain at the start of every element update
+  const Vec3 r31 = x.col(2) - x.col(0), r42 = x.col(3) - x.col(1), r21 = x.col(1) - x.col(0);
+  const Vec3 n = r31.cross(r42);
+  const Real nn = n.squaredNorm();
   const Real scale = std::max(r31.squaredNorm(), r42.squaredNorm());
-  if (!(n3 > 1e-12 * scale) || !std::isfinite(n3)) return false;
-  e3 /= n3;
-  const Vec3 r21 = x.col(1) - x.col(0);
-  Vec3 e1 = r21 - r21.dot(e3) * e3;
-  const Real n1 = e1.norm();
-  if (!(n1 > 1e-12 * std::sqrt(scale))) return false;
-  e1 /= n1;
+  if (!(nn > 1e-24 * scale * scale) || !std::isfinite(nn)) return false;
+  const Vec3 t = r21 - (r21.dot(n) / nn) * n;
+  const Real tt = t.squaredNorm();
+  if (!(tt > 1e-24 * scale)) return false;
+  const Vec3 e3 = n / std::sqrt(nn), e1 = t / std::sqrt(tt);
   const Vec3 e2 = e3.cross(e1);
   rotation.row(0) = e1.transpose();
   rotation.row(1) = e2.transpose();
@@ -251,12 +252,16 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   Real hg_power = 0.0;
   for (int i = 0; i < kHourglassSize; ++i) {
     const RateRows& rows = hg.rows[static_cast<std::size_t>(i)];
-    const Real rate = rows.rate(vw);
+    const int only = hg.only_row[static_cast<std::size_t>(i)];  // >= 0: the mode reads that row of vw alone
+    const Real rate = only >= 0 ? rows.m.row(only).dot(vw.row(only)) : rows.rate(vw);
     if (hg.stiffness[i] == 0.0 && hourglass[i] == 0.0) continue;  // (a held resultant still acts)
     const Real old = hourglass[i];
     hourglass[i] = std::clamp(hourglass[i] + dt * hg.stiffness[i] * rate, -hg.limit[i], hg.limit[i]);
     hg_power += 0.5 * (old + hourglass[i]) * rate;
-    rows.add_force(hourglass[i], fm);
+    if (only >= 0)
+      fm.row(only) += hourglass[i] * rows.m.row(only);
+    else
+      rows.add_force(hourglass[i], fm);
   }
   out.hourglass_power = hg_power;
 
@@ -394,10 +399,10 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   // left out, so pure out-of-plane bending is exact on rectangles):
   // (1/2) E t int (q d(xi eta)/dx)^2 dA = (1/2) (4/3) E t A |b1|^2 q^2 = (1/2) (E t A |b1|^2 / 12) (gamma . u)^2
   const Real bx = b1.squaredNorm(), by = b2.squaredNorm();
-  out.rows[0] = RateRows::zero();
-  out.rows[1] = RateRows::zero();
   out.rows[0].tx() = gamma;  // theta_x mode: kappa_yy = -d theta_x / dy
   out.rows[1].ty() = gamma;  // theta_y mode: kappa_xx = d theta_y / dx
+  out.only_row[0] = 3;       // (the other rows of these two are never read)
+  out.only_row[1] = 4;
   const Real bend = E * h * h * h / 12.0 * area / 12.0, mem = E * h * area / 12.0;
   // membrane: the mode u = q xi eta taken along the natural directions g_xi = sum xi_I x_I / 4 and g_eta
   // (centre), with the normal strain along each alone: e_xi = (q . g_xi) eta / |g_xi|^2, so

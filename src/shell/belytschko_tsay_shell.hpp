@@ -154,7 +154,13 @@ class BelytschkoTsayShell {
     std::array<RateRows, kHourglassSize> rows;
     std::array<Real, kHourglassSize> stiffness{};
     std::array<Real, kHourglassSize> limit;  // |Q_i| bound (the mode's peak stress at the yield stress)
-    HourglassRates() { limit.fill(INFINITY); }
+    /// >= 0: mode i reads (and its force acts on) only this row of the local motion, the rest of its
+    /// rows being left unset; -1: all six rows
+    std::array<int, kHourglassSize> only_row;
+    HourglassRates() {
+      limit.fill(INFINITY);
+      only_row.fill(-1);
+    }
   };
   /// Unit normals of the element's bilinear surface x(xi, eta) at its corners (local frame, columns);
   /// all e3 on a flat element.

@@ -23,9 +23,10 @@ struct StaticShellModel {
   Eigen::VectorXd load;
 };
 
-/// Assemble K from the element's internal force and solve K u = f on the free dofs.
+/// Assemble K from the element's internal force and solve K u = f on the free dofs. regularisation: added
+/// times the largest diagonal entry of K to every diagonal entry (0: K itself, which must be definite).
 Eigen::VectorXd solve_static(const StaticShellModel& m, const ShellSection& section, const material::ShellMaterial& material,
-                             Real thickness) {
+                             Real thickness, Real regularisation = 0.0) {
   BelytschkoTsayShell element(section, material);
   const Index ndof = 6 * static_cast<Index>(m.nodes.size());
   std::vector<Eigen::Triplet<Real>> triplets;
@@ -58,6 +59,10 @@ Eigen::VectorXd solve_static(const StaticShellModel& m, const ShellSection& sect
   }
   Eigen::SparseMatrix<Real> K(nfree, nfree);
   K.setFromTriplets(reduced.begin(), reduced.end());
+  if (regularisation > 0) {
+    const Real shift = regularisation * K.diagonal().cwiseAbs().maxCoeff();
+    for (Index d = 0; d < nfree; ++d) K.coeffRef(d, d) += shift;
+  }
   Eigen::VectorXd f(nfree);
   for (Index d = 0; d < ndof; ++d)
     if (free_index[static_cast<std::size_t>(d)] >= 0) f(free_index[static_cast<std::size_t>(d)]) = m.load(d);
@@ -94,7 +99,7 @@ StaticShellModel structured(int nc, int na, const std::function<Vec3(Real, Real)
 
 /// Scordelis-Lo roof (MacNeal & Harder 1985): R 25, L 50, 40 deg, t 0.25, E 4.32e8, nu 0, self weight 90
 /// per unit area, rigid diaphragms; quarter model. Returns u_z at mid-span of the free edge / 0.3024.
-Real scordelis_lo(int n, const ShellSection& section) {
+Real scordelis_lo(int n, const ShellSection& section, Real regularisation = 0.0) {
   const Real R = 25, half_length = 25, phi = 40.0 * M_PI / 180.0, t = 0.25, q = 90;
   material::LinearElasticShellMaterial material(4.32e8, 0.0, 1.0);
   StaticShellModel m = structured(
@@ -112,7 +117,7 @@ Real scordelis_lo(int n, const ShellSection& section) {
       if (j == n) f[1] = f[3] = f[5] = 1;        // mid-span symmetry
       if (i == 0) f[0] = f[4] = f[5] = 1;        // crown symmetry
     }
-  const Eigen::VectorXd u = solve_static(m, section, material, t);
+  const Eigen::VectorXd u = solve_static(m, section, material, t, regularisation);
   return -u(6 * id(n, n) + 2) / 0.3024;
 }
 
@@ -148,9 +153,12 @@ TEST(shell_StaticBenchmarks, ScordelisLoRoofConvergesToMacNealHarder) {
   EXPECT_LT(std::abs(r16 - 1.0), std::abs(r4 - 1.0));
   EXPECT_LT(std::abs(r16 - r8), std::abs(r8 - r4));
   // the seed's coefficient springs (r = 0.1) on the same mesh: the defect the physical model removes
+  // (the springs give the drilling rotation no stiffness: where two coplanar facets meet, along the free
+  // edge, it is a zero-energy mode of K, a pivot of either sign at round-off; the load does no work on it,
+  // and a shift of 1e-12 of the largest diagonal makes K definite without moving u measurably)
   ShellSection seed;
   seed.hourglass_model = HourglassModel::coefficients;
-  EXPECT_GT(scordelis_lo(8, seed), 1.3);
+  EXPECT_GT(scordelis_lo(8, seed, 1e-12), 1.3);
 }
 
 TEST(shell_StaticBenchmarks, PinchedCylinderApproachesMacNealHarder) {
