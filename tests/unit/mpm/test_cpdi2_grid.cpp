@@ -140,7 +140,8 @@ TEST(mpm_BackgroundGrid, TransfersConserveAndDoNotDependOnThreads) {
 
 // The one-pass P2G of a step equals three scatter() calls bit for bit. A grid that locates only the
 // corners within two cells of a block's bounding box (several ranks) gives the block's corners the same
-// G2P values, bit for bit, also after corners moved, left and joined that set.
+// G2P values (gather and the step's fused gather_and_finish), bit for bit, also after corners moved, left
+// and joined that set (the re-binning's merge of the moved corners into the kept order).
 TEST(mpm_BackgroundGrid, OnePassAndRestrictedTransfersEqualTheWholeOnes) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<Real> u(0.0, 20.0);
@@ -195,6 +196,15 @@ TEST(mpm_BackgroundGrid, OnePassAndRestrictedTransfersEqualTheWholeOnes) {
     grid.gather(wp, whole);
     near.gather(np, block, first, last);
     for (Index c = first; c < last; ++c) ASSERT_EQ(block.col(c), whole.col(c)) << when << " corner " << c;
+    // the step's fused G2P (two arrays in one pass, handed to a callback) gives the same values
+    PointMatrix fused_f(3, n), fused_p(3, n);
+    near.gather_and_finish(nf, np, first, last, [&](Index c, const Vec3& a, const Vec3& b) {
+      fused_f.col(c) = a;
+      fused_p.col(c) = b;
+    });
+    for (Index c = first; c < last; ++c) ASSERT_EQ(fused_p.col(c), whole.col(c)) << when << " corner " << c;
+    grid.gather(wf, whole);
+    for (Index c = first; c < last; ++c) ASSERT_EQ(fused_f.col(c), whole.col(c)) << when << " corner " << c;
   };
   compare("first locate");
   // move every corner by up to two cells: some change cell, some leave the set near the block, some join
