@@ -22,6 +22,12 @@ class ShellMaterial {
   /// sigma (5 components, followed by state_size() history values) is advanced by the rates over dt.
   /// rate = (d_xx, d_yy, 2 d_xy, 2 d_yz, 2 d_zx). Returns the thickness strain rate d_zz that keeps sigma_zz = 0.
   virtual Real update(Real* sigma, const Real* rate, Real dt) const = 0;
+  /// The whole section at once: `count` through-thickness points, point q's values (5 stresses, then the
+  /// history) at sigma + q * stride and its rates at rates + 5 q; its d_zz into dzz[q]. The element calls
+  /// this once per update (one virtual call, not one per point); the default calls update() per point.
+  virtual void update_section(Real* sigma, int stride, const Real* rates, int count, Real dt, Real* dzz) const {
+    for (int q = 0; q < count; ++q) dzz[q] = update(sigma + stride * q, rates + kStressComponents * q, dt);
+  }
   /// History values stored after the 5 stresses at each through-thickness point (all zero initially).
   virtual int state_size() const { return 0; }
   /// Equivalent plastic strain stored in one point's values (sigma + history); 0 for elastic models.
@@ -45,7 +51,15 @@ class LinearElasticShellMaterial final : public ShellMaterial {
  public:
   LinearElasticShellMaterial(Real young, Real poisson, Real density);
   Real update(Real* sigma, const Real* rate, Real dt) const override { return advance(sigma, rate, dt); }
-  /// The update, non-virtual and inline (the element's fast path for this material).
+  void update_section(Real* sigma, int stride, const Real* rates, int count, Real dt, Real* dzz) const override {
+    for (int q = 0; q < count; ++q) dzz[q] = advance(sigma + stride * q, rates + kStressComponents * q, dt);
+  }
+  Real young_modulus() const override { return young_; }
+  Real poisson_ratio() const override { return poisson_; }
+  Real density() const override { return density_; }
+
+ private:
+  /// One point's update, inline in both entry points.
   Real advance(Real* sigma, const Real* rate, Real dt) const {
     sigma[0] += dt * plane_stress_ * (rate[0] + poisson_ * rate[1]);
     sigma[1] += dt * plane_stress_ * (rate[1] + poisson_ * rate[0]);
@@ -54,11 +68,7 @@ class LinearElasticShellMaterial final : public ShellMaterial {
     sigma[4] += dt * shear_ * rate[4];
     return thickness_ratio_ * (rate[0] + rate[1]);
   }
-  Real young_modulus() const override { return young_; }
-  Real poisson_ratio() const override { return poisson_; }
-  Real density() const override { return density_; }
 
- private:
   Real young_, poisson_, density_;
   Real plane_stress_, shear_, thickness_ratio_;  // E / (1 - nu^2), mu, -nu / (1 - nu): from LinearElastic, once
 };

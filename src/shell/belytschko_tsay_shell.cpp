@@ -49,7 +49,6 @@ ThroughThicknessRule ThroughThicknessRule::lobatto(int n) {
 BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const material::ShellMaterial& material)
     : section_(section),
       material_(material),
-      linear_elastic_(dynamic_cast<const material::LinearElasticShellMaterial*>(&material)),
       young_(material.young_modulus()),
       poisson_(material.poisson_ratio()),
       shear_(material.shear_modulus()),
@@ -192,27 +191,35 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   const Real nu = poisson_, Gm = shear_, Ep = plane_stress_;
   Real tangent_membrane = 0.0, tangent_bending = 0.0, weight_membrane = 0.0, weight_bending = 0.0;
   const Real k = section_.shear_factor;
+  // the rates and the stresses before the update at every point, then the section in one material call
+  constexpr int kMostPoints = 7;  // (ThroughThicknessRule::lobatto)
+  Real rates[kMostPoints][material::kStressComponents], old[kMostPoints][material::kStressComponents], dzz[kMostPoints];
+  for (int q = 0; q < nq; ++q) {
+    const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * h;
+    const Real rate[material::kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
+    std::copy(rate, rate + material::kStressComponents, rates[q]);
+    std::copy(stress + stride * q, stress + stride * q + material::kStressComponents, old[q]);
+  }
+  material_.update_section(stress, stride, rates[0], nq, dt, dzz);
   for (int q = 0; q < nq; ++q) {
     const Real w = rule_.weights[static_cast<std::size_t>(q)] * 0.5 * h;
     const Real z = rule_.points[static_cast<std::size_t>(q)] * 0.5 * h;
-    const Real rate[material::kStressComponents] = {dx + z * kx, dy + z * ky, dxy2 + z * kxy2, dyz2, dxz2};
-    Real* s = stress + stride * q;
-    Real old[material::kStressComponents];
-    std::copy(s, s + material::kStressComponents, old);
-    const Real dzz = linear_elastic_ ? linear_elastic_->advance(s, rate, dt) : material_.update(s, rate, dt);
-    dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * dzz;
+    const Real* rate = rates[q];
+    const Real* s = stress + stride * q;
+    const Real* was = old[q];
+    dzz_mean += 0.5 * rule_.weights[static_cast<std::size_t>(q)] * dzz[q];
     if (plastic) {
       const Real t0 = Ep * (rate[0] + nu * rate[1]) * dt, t1 = Ep * (rate[1] + nu * rate[0]) * dt, t2 = Gm * rate[2] * dt;
       const Real trial = t0 * t0 + t1 * t1 + 2.0 * t2 * t2;
-      const Real d0 = s[0] - old[0], d1 = s[1] - old[1], d2 = s[2] - old[2];
+      const Real d0 = s[0] - was[0], d1 = s[1] - was[1], d2 = s[2] - was[2];
       const Real ratio = trial > 0.0 ? std::min(1.0, std::sqrt((d0 * d0 + d1 * d1 + 2.0 * d2 * d2) / trial)) : 1.0;
       tangent_membrane += w * ratio;
       weight_membrane += w;
       tangent_bending += w * z * z * ratio;
       weight_bending += w * z * z;
     }
-    power += w * (0.5 * (old[0] + s[0]) * rate[0] + 0.5 * (old[1] + s[1]) * rate[1] + 0.5 * (old[2] + s[2]) * rate[2] +
-                  k * 0.5 * (old[3] + s[3]) * rate[3] + k * 0.5 * (old[4] + s[4]) * rate[4]);
+    power += w * (0.5 * (was[0] + s[0]) * rate[0] + 0.5 * (was[1] + s[1]) * rate[1] + 0.5 * (was[2] + s[2]) * rate[2] +
+                  k * 0.5 * (was[3] + s[3]) * rate[3] + k * 0.5 * (was[4] + s[4]) * rate[4]);
     nxx += w * s[0];
     nyy += w * s[1];
     nxy += w * s[2];

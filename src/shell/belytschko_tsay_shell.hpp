@@ -193,7 +193,6 @@ class BelytschkoTsayShell {
 
   ShellSection section_;
   const material::ShellMaterial& material_;
-  const material::LinearElasticShellMaterial* linear_elastic_;  // the material if it is linear elastic (inline update)
   // the material's constants, read once: E, nu, G, E / (1 - nu^2), the yield stress (infinite if elastic)
   Real young_, poisson_, shear_, plane_stress_, stress_limit_;
   bool plastic_;
