@@ -3,7 +3,7 @@
 // seed 000): reading the `mpm:` and `shell:` sections and translating io::Case + Model into an mpm::MpmProblem.
 //
 // shell:                              (every key optional; defaults shown)
-//   thickness_points: 3               # Lobatto points through the thickness, 1..7 (seed eq (29))
+//   thickness_points: 3               # Lobatto points through the thickness, 1..7 (seed eq (29)); default 3, 7 with a plastic material
 //   hourglass: 0.1                    # hourglass coefficient r of eqs (30)-(36), 0..1 (0 = off)
 //   shear_factor: 0.8333              # transverse shear factor k
 //   warping_correction: true          # BWC-type rigid-body projection for warped elements

@@ -178,10 +178,11 @@ std::vector<std::string> MpmAnalysis::warnings() const {
                                 fmt::join(unused, ", mpm.")));
   }
   if (problem_.material.model != material::MaterialModel::j2_plasticity) return out;
-  if (s.thickness_points <= 3)
+  if (element_->thickness_points() <= 3)
     out.push_back(fmt::format("shell.thickness_points = {} with j2_plasticity: so few points cannot represent plastic "
-                              "bending (3 Lobatto points carry at most the first-yield moment, a real section 1.5 x); use 7",
-                              s.thickness_points));
+                              "bending (3 Lobatto points carry at most the first-yield moment, a real section 1.5 x); use 7 "
+                              "(the default with a plastic material)",
+                              element_->thickness_points()));
   if (o.analysis == MpmOptions::Kind::quasi_static && o.solver == MpmOptions::Solver::explicit_dynamics && o.level_ramp_steps == 0)
     out.push_back("mpm.level_ramp_steps = 0 with j2_plasticity: each load increment is applied at once and its dynamic "
                   "overshoot yields the material early; ramp it over a few thousand steps");

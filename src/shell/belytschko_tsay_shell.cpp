@@ -55,7 +55,9 @@ BelytschkoTsayShell::BelytschkoTsayShell(const ShellSection& section, const mate
       plane_stress_(material::LinearElastic{young_, poisson_}.plane_stress_modulus()),
       stress_limit_(material.stress_limit()),
       plastic_(material.is_plastic()),
-      rule_(ThroughThicknessRule::lobatto(section.thickness_points)) {}
+      rule_(ThroughThicknessRule::lobatto(section.thickness_points > 0
+                                              ? section.thickness_points
+                                              : ShellSection::default_thickness_points(material.is_plastic()))) {}
 
 bool BelytschkoTsayShell::corotational_frame(const NodeMatrix& x, Mat3& rotation) {
   // e3 along r31 x r42, e1 along r21 less its e3 part, e2 = e3 x e1. The e3 part is taken out with the

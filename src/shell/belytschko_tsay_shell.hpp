@@ -46,7 +46,12 @@ struct ThroughThicknessRule {
 enum class HourglassModel { physical, coefficients };
 
 struct ShellSection {
-  int thickness_points = 3;          // Lobatto points through the thickness
+  /// Lobatto points through the thickness (1..7); 0 = the default for the material: 3 for elastic models
+  /// (seed eq (29)), 7 for plastic ones (3 Lobatto points carry at most the first-yield moment, 7 carry
+  /// 0.96 of the fully plastic one: docs/mpm.md, validation/mpm_plastic_bending)
+  int thickness_points = 0;
+  /// The count an element of this section uses with `material`.
+  static int default_thickness_points(bool plastic) { return plastic ? 7 : 3; }
   Real shear_factor = 5.0 / 6.0;     // transverse shear correction k
   HourglassModel hourglass_model = HourglassModel::physical;
   /// Drilling penalty (physical model): energy 1/2 drilling G t A (theta_z - omega_z)^2 at the centre,

@@ -240,7 +240,7 @@ boundary:
 loads:
   - {select: {set: xmax}, traction: [250, 0, 0]}
 )";
-  const Outcome plain = run_case("plastic_warnings", yaml, "--set mpm.solver=explicit", true);
+  const Outcome plain = run_case("plastic_warnings", yaml, "--set mpm.solver=explicit --set shell.thickness_points=3", true);
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
   EXPECT_NE(plain.output.find("warning: shell.thickness_points = 3"), std::string::npos) << plain.output;
   EXPECT_NE(plain.output.find("warning: mpm.level_ramp_steps = 0"), std::string::npos) << plain.output;
@@ -248,6 +248,8 @@ loads:
   const Outcome newton = run_case("plastic_warnings_newton", yaml, "", true);
   ASSERT_EQ(newton.exit_code, 0) << newton.output;
   EXPECT_EQ(newton.output.find("level_ramp_steps"), std::string::npos) << newton.output;
+  // with a plastic material the default is 7 Lobatto points: no thickness-point warning
+  EXPECT_EQ(newton.output.find("thickness_points"), std::string::npos) << newton.output;
   EXPECT_EQ(plain.output.find("shell.hourglass_membrane"), std::string::npos) << plain.output;  // physical: no advice
   const Outcome springs = run_case("plastic_warnings_springs", yaml, "--set mpm.solver=explicit --set shell.hourglass=0.1", true);
   ASSERT_EQ(springs.exit_code, 0) << springs.output;

@@ -523,6 +523,22 @@ TEST(shell_BelytschkoTsay, PhysicalStabilisationStoresTheClosedFormEnergies) {
               1e-14 * G * t * q * q);
 }
 
+/// The default number of Lobatto points follows the material: 3 for an elastic one (seed eq (29)), 7 for a
+/// plastic one (3 points carry at most the first-yield moment); a number in the section is used as it is.
+TEST(shell_BelytschkoTsay, DefaultThicknessPointsFollowTheMaterial) {
+  const material::J2PlasticShellMaterial steel(2.0e5, 0.3, 7.8e-3, 200.0, 0.0);
+  const material::LinearElasticShellMaterial elastic(2.0e5, 0.3, 7.8e-3);
+  ShellSection automatic;
+  EXPECT_EQ(BelytschkoTsayShell(automatic, steel).thickness_points(), 7);
+  EXPECT_EQ(BelytschkoTsayShell(automatic, elastic).thickness_points(), 3);
+  ShellSection three;
+  three.thickness_points = 3;
+  EXPECT_EQ(BelytschkoTsayShell(three, steel).thickness_points(), 3);
+  ShellSection five;
+  five.thickness_points = 5;
+  EXPECT_EQ(BelytschkoTsayShell(five, elastic).thickness_points(), 5);
+}
+
 /// With a plastic material the physical stabilisation yields with it: the membrane hourglass resultant of
 /// u_x = q xi eta is bounded where the mode's peak stress reaches the yield stress, Q <= sigma_y t A |b_x| / 6,
 /// and in an element that is flowing plastically (uniaxial stretch beyond yield) the hourglass stiffness
