@@ -455,7 +455,10 @@ Case CaseReader::read() {
       disc.spacing = spacing;
     }
     if (allowed("elements") && d.has("elements")) {
-      if (auto e = d.child("elements").as_integers(2)) {
+      if (c.geometry.type == GeometryType::mesh) {  // the file's elements are used: counts would be ignored
+        d.child("elements").error("no element counts with geometry.type: mesh (the mesh file's elements are used; "
+                                  "refine the mesh file instead)");
+      } else if (auto e = d.child("elements").as_integers(2)) {
         if ((*e)[0] < 1 || (*e)[1] < 1)
           d.child("elements").error("element counts >= 1", fmt::format("[{}, {}]", (*e)[0], (*e)[1]));
         else if ((*e)[0] > kMaxDiscretizationCount / (*e)[1])
