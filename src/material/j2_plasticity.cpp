@@ -35,6 +35,18 @@ Real J2PlasticShellMaterial::flow_slope(Real eps_p) const {
   return eps_p > 0.0 ? hardening_ * exponent_ * std::pow(eps_p, exponent_ - 1.0) : INFINITY;
 }
 
+Real J2PlasticShellMaterial::yield_margin(const Real* point) const {
+  const Real a = point[0], b = point[1], s = point[2];
+  return flow_stress(point[kStressComponents]) - std::sqrt(std::max(0.0, a * a - a * b + b * b + 3.0 * s * s));
+}
+
+Real J2PlasticShellMaterial::hardening_share(const Real* point) const {
+  const Real slope = flow_slope(point[kStressComponents]);
+  if (!std::isfinite(slope)) return 1.0;
+  const Real h = std::max(slope, 0.0);
+  return h / (young_ + h);
+}
+
 Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) const {
   const LinearElastic elastic{young_, poisson_};
   const Real E = young_, nu = poisson_, c = elastic.plane_stress_modulus(), g = elastic.mu();

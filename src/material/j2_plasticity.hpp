@@ -26,6 +26,8 @@ class J2PlasticShellMaterial final : public ShellMaterial {
   Real plastic_strain(const Real* point) const override { return point[kStressComponents]; }
   bool is_plastic() const override { return true; }
   Real stress_limit() const override { return yield_; }
+  Real yield_margin(const Real* point) const override;
+  Real hardening_share(const Real* point) const override;
   Real young_modulus() const override { return young_; }
   Real poisson_ratio() const override { return poisson_; }
   Real density() const override { return density_; }

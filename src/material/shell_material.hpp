@@ -36,6 +36,12 @@ class ShellMaterial {
   /// Largest stress the material carries (initial yield for J2; infinity for elastic models): bounds
   /// the physical hourglass stresses of BelytschkoTsayShell so that they yield with the material.
   virtual Real stress_limit() const { return INFINITY; }
+  /// How much more stress the point (its 5 stresses and history) takes before it yields: the current flow
+  /// stress less the in-plane von Mises stress (infinity for elastic models).
+  virtual Real yield_margin(const Real* /*point*/) const { return INFINITY; }
+  /// The share of a further plastic strain increment the flow stress takes up, H / (E + H) with H the
+  /// hardening slope at the point (0 perfectly plastic, 1 for elastic models).
+  virtual Real hardening_share(const Real* /*point*/) const { return 1.0; }
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
   virtual Real density() const = 0;

@@ -192,6 +192,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   const bool plastic = plastic_;
   const Real nu = poisson_, Gm = shear_, Ep = plane_stress_;
   Real tangent_membrane = 0.0, tangent_bending = 0.0, weight_membrane = 0.0, weight_bending = 0.0;
+  // plastic materials: the points' margins to yield (z^2-weighted section mean) and H / (E + H) (section mean)
+  Real margin_bending = 0.0, hardening_share = 0.0;
   const Real k = section_.shear_factor;
   // the rates and the stresses before the update at every point, then the section in one material call
   constexpr int kMostPoints = 7;  // (ThroughThicknessRule::lobatto)
@@ -219,6 +221,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
       weight_membrane += w;
       tangent_bending += w * z * z * ratio;
       weight_bending += w * z * z;
+      margin_bending += w * z * z * std::max(0.0, material_.yield_margin(s));
+      hardening_share += w * material_.hardening_share(s);
     }
     power += w * (0.5 * (was[0] + s[0]) * rate[0] + 0.5 * (was[1] + s[1]) * rate[1] + 0.5 * (was[2] + s[2]) * rate[2] +
                   k * 0.5 * (was[3] + s[3]) * rate[3] + k * 0.5 * (was[4] + s[4]) * rate[4]);
@@ -253,19 +257,39 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   }
 
   // hourglass resistance: physical stabilisation (default) or the seed's coefficient springs
+  if (weight_membrane > 0) hardening_share /= weight_membrane;
   const HourglassRates hg = physical
                                 ? physical_hourglass(xh, yh, zh, edges, jacobian, jacobian_inverse, warped, b1, b2, h, area,
                                                      weight_membrane > 0 ? tangent_membrane / weight_membrane : 1.0,
-                                                     weight_bending > 0 ? tangent_bending / weight_bending : 1.0)
+                                                     weight_bending > 0 ? tangent_bending / weight_bending : 1.0,
+                                                     weight_bending > 0 ? margin_bending / weight_bending : INFINITY)
                                 : coefficient_hourglass(xh, yh, b1, b2, h, area);
+  // Plastic materials, bending modes: the mode is the variation of the curvature across the element, which the
+  // centre's section does not see; at the element's edges the moment is the centre's plus the mode's. So the
+  // mode's moment Q_i is bounded by the section's own margin to yield around a held part H_i (state after the
+  // resultants): elastic within the margin, beyond it the material's hardening share H / (E + H) of the excess
+  // goes into H_i (a one-dimensional elastoplastic law with linear kinematic hardening). A section flowing at the
+  // centre (folds, plastic hinges) then carries no spurious moment gradient (perfect plasticity), and a hardening
+  // one carries its hardening. The membrane modes keep the first-yield bound alone: the translations pass through
+  // the background grid, whose transfer noise their stiffness must keep damping while the section flows (the
+  // same margin on them let that noise drift the plastic strip's explicit path by 0.7 %).
+  Real* held = hourglass + kHourglassModes;  // H_0, H_1
   Real hg_power = 0.0;
-  for (int i = 0; i < kHourglassSize; ++i) {
+  for (int i = 0; i < kHourglassModes; ++i) {
     const RateRows& rows = hg.rows[static_cast<std::size_t>(i)];
     const int only = hg.only_row[static_cast<std::size_t>(i)];  // >= 0: the mode reads that row of vw alone
     const Real rate = only >= 0 ? rows.m.row(only).dot(vw.row(only)) : rows.rate(vw);
     if (hg.stiffness[i] == 0.0 && hourglass[i] == 0.0) continue;  // (a held resultant still acts)
     const Real old = hourglass[i];
-    hourglass[i] = std::clamp(hourglass[i] + dt * hg.stiffness[i] * rate, -hg.limit[i], hg.limit[i]);
+    const Real trial = old + dt * hg.stiffness[i] * rate;
+    const Real excess = i < 2 ? std::abs(trial - held[i]) - hg.margin[i] : -1.0;  // (margin infinite if elastic)
+    if (excess > 0.0) {
+      const Real sign = trial > held[i] ? 1.0 : -1.0;
+      held[i] = std::clamp(held[i] + sign * hardening_share * excess, -hg.limit[i], hg.limit[i]);
+      hourglass[i] = std::clamp(trial - sign * (1.0 - hardening_share) * excess, -hg.limit[i], hg.limit[i]);
+    } else {
+      hourglass[i] = std::clamp(trial, -hg.limit[i], hg.limit[i]);
+    }
     hg_power += 0.5 * (old + hourglass[i]) * rate;
     if (only >= 0)
       fm.row(only) += hourglass[i] * rows.m.row(only);
@@ -400,7 +424,7 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
                                                                             bool corrected,
                                                                             const Row4& b1, const Row4& b2, Real h,
                                                                             Real area, Real tangent_membrane,
-                                                                            Real tangent_bending) const {
+                                                                            Real tangent_bending, Real margin_bending) const {
   HourglassRates out;
   const Row4 gamma = hourglass_gamma(xh, yh, b1, b2);  // gamma . u = 4 q for u = q xi eta
   const Real E = young_, G = shear_, k = section_.shear_factor;
@@ -492,6 +516,9 @@ BelytschkoTsayShell::HourglassRates BelytschkoTsayShell::physical_hourglass(cons
   if (std::isfinite(sy)) {
     const Real ax = std::sqrt(bx), ay = std::sqrt(by);
     const Real ty_shear = sy / std::sqrt(3.0);
+    // the bending modes' margin: the same peak stress at the section's margin to yield
+    out.margin[0] = std::min(sy, margin_bending) * h * h * area * ay / 36.0;
+    out.margin[1] = std::min(sy, margin_bending) * h * h * area * ax / 36.0;
     out.limit = {sy * h * h * area * ay / 36.0, sy * h * h * area * ax / 36.0,
                  k * h * area / 3.0 * std::sqrt(c_xi) * ty_shear, sy * h * area * mem_xi / 6.0, sy * h * area * mem_eta / 6.0,
                  k * h * area / 3.0 * std::sqrt(c_eta) * ty_shear, INFINITY};

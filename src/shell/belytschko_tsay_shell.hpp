@@ -104,9 +104,12 @@ class BelytschkoTsayShell {
   int point_stride() const { return material::kStressComponents + material_.state_size(); }
   /// Doubles of stress state per element (point_stride() per through-thickness point).
   int stress_size() const { return point_stride() * thickness_points(); }
-  /// Hourglass (stabilisation) resultants per element: bending x, bending y, transverse w (coefficient
-  /// model) or transverse xi (physical), membrane x, membrane y, transverse eta, drilling (physical).
-  static constexpr int kHourglassSize = 7;
+  /// Hourglass (stabilisation) modes: bending x, bending y, transverse w (coefficient model) or transverse
+  /// xi (physical), membrane x, membrane y, transverse eta, drilling (physical).
+  static constexpr int kHourglassModes = 7;
+  /// Hourglass state per element: the kHourglassModes resultants Q_i, then (plastic materials, physical
+  /// stabilisation) the held (hardening) parts H_0, H_1 of the two bending modes (update()).
+  static constexpr int kHourglassSize = kHourglassModes + 2;
 
   /// Advance the element by one step: rates from the node velocities v and angular velocities
   /// omega at the configuration x (global frame), stress update over dt, internal forces.
@@ -156,14 +159,18 @@ class BelytschkoTsayShell {
   /// Hourglass generalised strain rates q_i = rows[i].rate(v, w) (local frame) and the stiffness of each
   /// (Q_i += dt stiffness_i q_i; the forces are the conjugates Q_i * the rows).
   struct HourglassRates {
-    std::array<RateRows, kHourglassSize> rows;
-    std::array<Real, kHourglassSize> stiffness{};
-    std::array<Real, kHourglassSize> limit;  // |Q_i| bound (the mode's peak stress at the yield stress)
+    std::array<RateRows, kHourglassModes> rows;
+    std::array<Real, kHourglassModes> stiffness{};
+    std::array<Real, kHourglassModes> limit;   // |Q_i| bound (the mode's peak stress at the yield stress)
+    /// |Q_i - H_i| bound of the two bending modes of a plastic material: the section's own margin to yield
+    /// (infinity otherwise; see update())
+    std::array<Real, kHourglassModes> margin;
     /// >= 0: mode i reads (and its force acts on) only this row of the local motion, the rest of its
     /// rows being left unset; -1: all six rows
-    std::array<int, kHourglassSize> only_row;
+    std::array<int, kHourglassModes> only_row;
     HourglassRates() {
       limit.fill(INFINITY);
+      margin.fill(INFINITY);
       only_row.fill(-1);
     }
   };
@@ -194,7 +201,7 @@ class BelytschkoTsayShell {
   HourglassRates physical_hourglass(const Row4& xh, const Row4& yh, const Row4& zh, const EdgeShears& edges,
                                     const Eigen::Matrix<Real, 2, 2>& jacobian, const Eigen::Matrix<Real, 2, 2>& jinv,
                                     bool corrected, const Row4& b1, const Row4& b2, Real h, Real area,
-                                    Real tangent_membrane, Real tangent_bending) const;
+                                    Real tangent_membrane, Real tangent_bending, Real margin_bending) const;
 
   ShellSection section_;
   const material::ShellMaterial& material_;

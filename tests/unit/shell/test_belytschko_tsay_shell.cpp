@@ -579,5 +579,67 @@ TEST(shell_BelytschkoTsay, PhysicalStabilisationYieldsWithAPlasticMaterial) {
   EXPECT_LT(std::abs(flowing), 0.5 * E * t * A * bx * bx / 12.0 * gamma_u_per_q * q_small);
 }
 
+// Bending modes of a plastic section: the mode's moment stays within the section's margin to yield around its
+// held (hardening) part. A section flowing in bending takes no moment gradient when perfectly plastic, and the
+// hardening share H / (E + H) of the elastic increment when it hardens; a section at rest takes it elastically.
+TEST(shell_BelytschkoTsay, BendingHourglassOfAFlowingSectionIsBoundedByItsMargin) {
+  const Real E = 2.0e5, nu = 0.3, rho = 7.8e-3, sy = 200.0, t = 0.1, a = 1.0, b = 0.5, A = 4 * a * b;
+  const NodeMatrix x = element(Mat3::Identity(), 2 * a, 2 * b);
+  const Real hpat[4] = {1, -1, 1, -1};
+  const Real bx = 1.0 / (2.0 * a), c = 1e-6;  // |b_x|; the hourglass rotation rate (theta_y = c h_I)
+  // elastic increment of Q_1 (the theta_y mode) for gamma . theta = 4 c over dt = 1, material tangent 1
+  const Real elastic = E * t * t * t / 12.0 * A / 12.0 * bx * bx * 4.0 * c;
+  const Real kappa = 100.0 * (sy / E) / (0.5 * t);  // outer fibre strain 100 x the yield strain in one step
+  for (const Real hardening : {0.0, 2000.0}) {
+    const material::J2PlasticShellMaterial steel(E, nu, rho, sy, hardening);
+    ShellSection section;  // physical, 7 Lobatto points (the plastic default)
+    BelytschkoTsayShell shell(section, steel);
+    std::vector<Real> stress(static_cast<std::size_t>(shell.stress_size()), 0.0);
+    Real hg[BelytschkoTsayShell::kHourglassSize] = {};
+    Real h = t;
+    NodeMatrix bend = NodeMatrix::Zero(), mode = NodeMatrix::Zero();
+    for (int n = 0; n < 4; ++n) {
+      bend(1, n) = kappa * x(0, n);  // uniform kappa_xx: no hourglass rate
+      mode(1, n) = c * hpat[n];
+    }
+    // at rest: the elastic increment
+    {
+      std::vector<Real> fresh(static_cast<std::size_t>(shell.stress_size()), 0.0);
+      Real q[BelytschkoTsayShell::kHourglassSize] = {};
+      Real thickness = t;
+      shell.update(x, NodeMatrix::Zero(), mode, 1.0, fresh.data(), q, thickness);
+      EXPECT_NEAR(q[1], elastic, 1e-9 * elastic) << "H = " << hardening;
+    }
+    shell.update(x, NodeMatrix::Zero(), bend, 1.0, stress.data(), hg, h);
+    EXPECT_EQ(hg[1], 0.0);
+    shell.update(x, NodeMatrix::Zero(), bend + mode, 1.0, stress.data(), hg, h);  // flowing, and the mode on top
+    const Real share = hardening / (E + hardening);
+    if (hardening == 0.0) {
+      EXPECT_LE(std::abs(hg[1]), 1e-4 * elastic);
+    } else {
+      EXPECT_GT(hg[1], 0.0);
+      EXPECT_LE(hg[1], share * elastic * (1.0 + 1e-9));
+      EXPECT_NEAR(hg[BelytschkoTsayShell::kHourglassSize - 1], hg[1], 1e-4 * elastic);  // all of it held
+    }
+  }
+  // non-proportional flow (stretched along y past yield, then along x): the centre's stress moves along the
+  // yield surface, so its tangent ratio is far from 0, but the section has no margin for a moment gradient
+  const material::J2PlasticShellMaterial steel(E, nu, rho, sy, 0.0);
+  ShellSection section;
+  BelytschkoTsayShell shell(section, steel);
+  std::vector<Real> stress(static_cast<std::size_t>(shell.stress_size()), 0.0);
+  Real hg[BelytschkoTsayShell::kHourglassSize] = {};
+  Real h = t;
+  NodeMatrix stretch_y = NodeMatrix::Zero(), stretch_x = NodeMatrix::Zero(), mode = NodeMatrix::Zero();
+  for (int n = 0; n < 4; ++n) {
+    stretch_y(1, n) = 0.01 * x(1, n);
+    stretch_x(0, n) = 0.01 * x(0, n);
+    mode(1, n) = c * hpat[n];
+  }
+  shell.update(x, stretch_y, NodeMatrix::Zero(), 1.0, stress.data(), hg, h);
+  shell.update(x, stretch_x, mode, 1.0, stress.data(), hg, h);
+  EXPECT_LE(std::abs(hg[1]), 1e-4 * elastic);
+}
+
 }  // namespace
 }  // namespace lamina::shell
