@@ -272,7 +272,8 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
   // centre (folds, plastic hinges) then carries no spurious moment gradient (perfect plasticity), and a hardening
   // one carries its hardening. The membrane modes keep the first-yield bound alone: the translations pass through
   // the background grid, whose transfer noise their stiffness must keep damping while the section flows (the
-  // same margin on them let that noise drift the plastic strip's explicit path by 0.7 %).
+  // same margin on them drifted the plastic strip's explicit path by 0.7 %, against 0.36 % without; its Newton
+  // path, solved on the shell nodes without the grid, was unchanged).
   Real* held = hourglass + kHourglassModes;  // H_0, H_1
   Real hg_power = 0.0;
   for (int i = 0; i < kHourglassModes; ++i) {
