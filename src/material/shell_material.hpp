@@ -39,8 +39,9 @@ class ShellMaterial {
   /// How much more stress the point (its 5 stresses and history) takes before it yields: the current flow
   /// stress less the in-plane von Mises stress (infinity for elastic models).
   virtual Real yield_margin(const Real* /*point*/) const { return INFINITY; }
-  /// The share of a further plastic strain increment the flow stress takes up, H / (E + H) with H the
-  /// hardening slope at the point (0 perfectly plastic, 1 for elastic models).
+  /// How much of an elastic stress increment a flowing point keeps under further uniaxial straining: the
+  /// tangent over Young's modulus, H / (E + H) with H the hardening slope at the point (0 perfectly plastic,
+  /// 1 for elastic models).
   virtual Real hardening_share(const Real* /*point*/) const { return 1.0; }
   virtual Real young_modulus() const = 0;
   virtual Real poisson_ratio() const = 0;
