@@ -5,6 +5,11 @@
 
 namespace lamina::material {
 
+namespace {
+/// sigma_vm of an in-plane stress state (xx, yy, xy), the J2 yield function's measure in plane stress.
+Real plane_stress_von_mises(Real a, Real b, Real s) { return std::sqrt(std::max(0.0, a * a - a * b + b * b + 3.0 * s * s)); }
+}  // namespace
+
 MaterialModelInfo j2_plasticity_model() {
   MaterialModelInfo info;
   info.model = MaterialModel::j2_plasticity;
@@ -36,8 +41,7 @@ Real J2PlasticShellMaterial::flow_slope(Real eps_p) const {
 }
 
 Real J2PlasticShellMaterial::yield_margin(const Real* point) const {
-  const Real a = point[0], b = point[1], s = point[2];
-  return flow_stress(point[kStressComponents]) - std::sqrt(std::max(0.0, a * a - a * b + b * b + 3.0 * s * s));
+  return flow_stress(point[kStressComponents]) - plane_stress_von_mises(point[0], point[1], point[2]);
 }
 
 Real J2PlasticShellMaterial::hardening_share(const Real* point) const {
@@ -58,9 +62,8 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
   Real sxy = sigma[2] + dt * g * rate[2];
   sigma[3] += dt * g * rate[3];
   sigma[4] += dt * g * rate[4];
-  const auto von_mises = [](Real a, Real b, Real s) { return std::sqrt(std::max(0.0, a * a - a * b + b * b + 3.0 * s * s)); };
   Real plastic_zz = 0.0;
-  const Real trial_von_mises = von_mises(sxx, syy, sxy);
+  const Real trial_von_mises = plane_stress_von_mises(sxx, syy, sxy);
   // (a non-finite trial is left as it is: the analysis stops on the non-finite energy it causes)
   if (std::isfinite(trial_von_mises) && trial_von_mises > flow_stress(eps_p)) {
     // return in the eigenbasis of C and P (seed-independent; Simo & Hughes 3.4)
@@ -95,7 +98,7 @@ Real J2PlasticShellMaterial::update(Real* sigma, const Real* rate, Real dt) cons
     sxx = (r1 - r2) / std::sqrt(2.0);
     syy = (r1 + r2) / std::sqrt(2.0);
     sxy = xi3 / d2;
-    const Real vm = von_mises(sxx, syy, sxy);
+    const Real vm = plane_stress_von_mises(sxx, syy, sxy);
     eps_p += 2.0 / 3.0 * dg * vm;
     plastic_zz = -dg * (sxx + syy) / 3.0;
   }
