@@ -199,7 +199,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   }
 
   // constraint terms
-  Eigen::MatrixXd Kc, n_columns, v_columns;
+  Eigen::MatrixXd Kc;
   Eigen::VectorXd fc;
   auto& multiplier_entries = system.multiplier_entries;
   Eigen::VectorXd& multiplier_rhs = system.multiplier_rhs;
@@ -223,34 +223,38 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
     }
   } else if (adds_boundary) {
     // consecutive points with the same neighbours (the Gauss points of one boundary cell face) add up in
-    // one dense block, scattered once: the scatter's pattern search, not the terms, was the cost
+    // one block, scattered once: the scatter's pattern search, not the terms, was the cost. A group of
+    // Nitsche points goes straight into the matrix (scatter_nitsche_products), one with penalty terms
+    // through a dense block.
+    NitscheColumns nitsche;
     for (std::size_t i = 0; i < constraint_points_.size();) {
       const auto& group = constraint_shapes[i];
       const Index size = 3 * static_cast<Index>(group.neighbours.size());
-      Kc.setZero(size, size);
-      fc.setZero(size);
       std::size_t end = i;
       while (end < constraint_points_.size() && constraint_shapes[end].neighbours == group.neighbours) ++end;
-      // Nitsche: the group's columns n, v (at most 3 a point), then K += N V^T + V N^T in two products
-      const Index most_columns = 3 * static_cast<Index>(end - i);
-      if (n_columns.rows() != size || n_columns.cols() < most_columns) {
-        n_columns.resize(size, most_columns);
-        v_columns.resize(size, most_columns);
-      }
-      Index columns = 0;
+      bool penalty = false;
+      for (std::size_t j = i; j < end; ++j)
+        penalty |= !(options.essential == EssentialMethod::nitsche && constraint_points_[j].surface);
+      nitsche.reset(size / 3, static_cast<Index>(end - i));
+      fc.setZero(size);
+      if (penalty) Kc.setZero(size, size);
       for (std::size_t j = i; j < end; ++j) {
         const auto& p = constraint_points_[j];
         const auto& sv = constraint_shapes[j];
         if (options.essential == EssentialMethod::nitsche && p.surface) {
           const auto& mat = materials_[static_cast<std::size_t>(p.material)];
           const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
-          columns = nitsche_columns(sv, p, mat, beta, n_columns, v_columns, columns, fc);
+          nitsche_columns(sv, p, mat, beta, nitsche, fc);
         } else {
           penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
         }
       }
-      add_nitsche_products(n_columns, v_columns, columns, Kc, pattern.symmetric());
-      pattern.scatter(group.neighbours, Kc, values);
+      if (penalty) {
+        add_nitsche_products(nitsche, Kc);
+        pattern.scatter(group.neighbours, Kc, values);
+      } else {
+        scatter_nitsche_products(nitsche, pattern, group.neighbours, values);
+      }
       scatter_vector(group, fc, f);
       i = end;
     }

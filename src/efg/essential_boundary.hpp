@@ -33,9 +33,11 @@
 // bound as nu -> 0.5 and would lock a nearly incompressible body at its constrained faces). efg.penalty gives alpha directly (force per length per
 // area for surface constraints, force per length for point constraints).
 #include <array>
+#include <vector>
 
 #include "material/linear_elastic.hpp"
 #include "mls/mls_shape_functions.hpp"
+#include "solve/block_pattern.hpp"
 
 namespace lamina::efg {
 
@@ -62,18 +64,37 @@ Eigen::Matrix<Real, 3, Eigen::Dynamic> traction_operator(const mls::ShapeFunctio
 void penalty_terms(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, Real alpha, Eigen::MatrixXd& K,
                    Eigen::VectorXd& f);
 
-/// Nitsche terms of the surface points of a group that share their neighbours (a boundary cell face):
+/// Nitsche terms of the surface points of a group that share their m neighbours (a boundary cell face):
 /// K += w (-N^T S T - T^T S N + beta N^T S N), f += w (-T^T S u-bar + beta N^T S u-bar) summed over the
-/// points (K: 3m x 3m and f: 3m, sized and zeroed by the caller, as for penalty_terms), formed as
-/// matrix products: K = sum over points and held components a of (n v^T + v n^T) with n = N_a^T and
-/// v = -w T_a^T + (w beta / 2) n. nitsche_columns writes the point's n and v as columns of `n_columns`
-/// and `v_columns` from `column` on (3m rows; at most 3 columns a point) and adds its f; it returns the
-/// next free column. add_nitsche_products adds N V^T + V N^T over the first `columns` columns to K
-/// (upper triangle only if upper_only): two matrix-matrix products instead of one rank-2 update of
-/// the whole block per point and component.
-Index nitsche_columns(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
-                      Real beta, Eigen::MatrixXd& n_columns, Eigen::MatrixXd& v_columns, Index column, Eigen::VectorXd& f);
-void add_nitsche_products(const Eigen::MatrixXd& n_columns, const Eigen::MatrixXd& v_columns, Index columns,
-                          Eigen::MatrixXd& K, bool upper_only);
+/// points. K is the sum over points and held components a of n v^T + v n^T with n = N_a^T (phi_k in the
+/// rows 3k + a, zero in the others) and v = -w T_a^T + (w beta / 2) n. The columns are kept by
+/// component: phi[a] holds the points' phi (m values each), v[a] their v (3m values each). Then
+/// (N V^T)(3I + a, j) = P_a(I, j) with P_a = phi_a v_a^T (m x 3m), and V N^T is its transpose: three
+/// m x P_a by P_a x 3m products (P_a points holding a) instead of two 3m x 3P by 3P x 3m products whose
+/// n columns are two thirds zeros, and no dense 3m x 3m block to clear, fill and read back.
+struct NitscheColumns {
+  std::array<Eigen::MatrixXd, 3> phi;  // m x count[a]
+  std::array<Eigen::MatrixXd, 3> v;    // 3m x count[a]
+  std::array<Index, 3> count{0, 0, 0};
+  Eigen::MatrixXd products;            // workspace: P_0 P_1 P_2 side by side (m x 9m)
+  std::vector<int> rank_of;            // workspace of scatter_nitsche_products (one per node)
+  /// No columns, room for `points` points over m nodes (allocates only when larger than before).
+  void reset(Index m, Index points);
+  Index nodes() const { return phi[0].rows(); }
+  /// Forms `products`: P_a(I, j) at products(I, 3m a + j).
+  void form_products();
+};
+
+/// Adds one surface point's columns (one per held component) to `columns` and its load terms to f (3m).
+void nitsche_columns(const mls::ShapeFunctionValues& sv, const ConstraintPoint& p, const material::LinearElastic& material,
+                     Real beta, NitscheColumns& columns, Eigen::VectorXd& f);
+/// K += N V^T + V N^T into a dense 3m x 3m block (for groups that also hold penalty terms).
+void add_nitsche_products(NitscheColumns& columns, Eigen::MatrixXd& K);
+/// The same added straight into the values of a global matrix with `pattern`, over the group's nodes
+/// (sorted ascending, every pair of them in the pattern). Symmetric patterns take the upper triangle.
+/// (Serial: shared between the two OpenMP threads of this machine, a group's products and its scatter each
+/// took as long per thread as on one.)
+void scatter_nitsche_products(NitscheColumns& columns, const solve::BlockPattern& pattern, const IndexList& nodes,
+                              Real* values);
 
 }  // namespace lamina::efg

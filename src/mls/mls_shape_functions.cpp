@@ -50,8 +50,14 @@ using namespace simd;  // Real4 and its helpers (mls/real4.hpp)
 /// Above this condition estimate the shape functions are computed in a weighted-orthonormal basis,
 /// orthonormalised twice (Cholesky-QR2). With A^-1 applied directly, rounding in A leaves the
 /// consistency (reproduction) conditions of the derivatives satisfied only to O(eps cond A) times the
-/// size of the intermediate terms; for cond <= 100 that is below 1e-12 on the test layouts.
+/// size of the intermediate terms; for cond <= 100 that is below 1e-12 on the test layouts, for the
+/// second derivatives too.
 constexpr Real orthonormalise_condition = 1e2;
+/// The same for evaluations up to first derivatives (the Galerkin EFG's): their error stays below 1e-12
+/// up to cond 1e4 (test FirstDerivativesOnThinPlateLattices: 7.8e-13 at 1.6e3; second derivatives formed
+/// directly up to 1e6 failed the reproduction tests by up to 9e-9). The plates' moment matrices sit at 1e2-1e4, and the orthonormal path cost about 10 %
+/// of a small EFG run (R1a 6 x 6 x 4).
+constexpr Real orthonormalise_condition_first = 1e4;
 
 /// Point-centred supports measure distances in units of the mean nodal spacing per axis when the
 /// largest of those spacings exceeds the smallest by this factor (a plate or shell lattice).
@@ -788,8 +794,9 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
   // Two equivalent ways to apply A^-1 (= S A_s^-1 S = T^T T, T = L^-1 S with A_s = L L^T):
   //  direct:       basis rows p_I, right-hand sides g as they are, solve(h) = S A_s^-1 S h;
   //  orthonormal:  basis rows q_I = T p_I (orthonormalised once more, T <- T2 T), right-hand sides
-  //                T g, solve(h) = h -- used above orthonormalise_condition for accuracy.
-  const bool orthonormal = out.condition > orthonormalise_condition;
+  //                T g, solve(h) = h -- used above orthonormalise_condition(_first) for accuracy.
+  const bool orthonormal =
+      out.condition > (derivative_order >= 2 ? orthonormalise_condition : orthonormalise_condition_first);
   MatrixM transform;  // set (and used) only when orthonormal: no identity matrix is filled per point
   if (orthonormal) {
     transform = factor.transform();
