@@ -62,7 +62,7 @@ void nitsche_columns(const mls::ShapeFunctionValues& sv, const ConstraintPoint& 
 }
 
 void NitscheColumns::form_products() {
-  // column by column, axpys of phi's columns: Eigen's GEMM is no gain for so few points, and above 50,000
+  // column by column (matrix-vector products): Eigen's GEMM is no gain for so few points, and above 50,000
   // multiply-adds it splits a product over the OpenMP threads and spins while the second one wakes
   const Index m = nodes();
   products.resize(m, 9 * m);
@@ -74,11 +74,7 @@ void NitscheColumns::form_products() {
       products.middleCols(3 * m * a, 3 * m).setZero();
       continue;
     }
-    for (Index j = 0; j < 3 * m; ++j) {
-      auto out = products.col(3 * m * a + j);
-      out.noalias() = w(j, 0) * p.col(0);
-      for (Index k = 1; k < c; ++k) out.noalias() += w(j, k) * p.col(k);
-    }
+    for (Index j = 0; j < 3 * m; ++j) products.col(3 * m * a + j).noalias() = p.leftCols(c) * w.row(j).head(c).transpose();
   }
 }
 
