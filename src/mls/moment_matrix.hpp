@@ -117,19 +117,35 @@ class MomentMatrixFactor {
     const Real pivot = rows_[K][kb][kl];
     if (!(pivot > minimum_pivot)) return false;
     const Real inverse_pivot = 1.0 / pivot;
-    // In place: column K of the identity shares column K of A, so its entry is set before the update
-    // (1 in the pivot row, 0 in the others) and the update then writes 1 / pivot and -factor / pivot.
-    rows_[K][kb][kl] = 1.0;
+    // In place: column K of the identity shares column K of A. Row K becomes row K / pivot with 1 / pivot
+    // in column K; every other row i becomes row i - A_iK row K / pivot with -A_iK / pivot in column K.
+    // The factor A_iK is broadcast from its lane and column K is written by a blend (both register
+    // operations: a scalar store into a row read back as a vector would stall the store forwarding).
+    using Mask4 = long long __attribute__((vector_size(32)));
+    constexpr Mask4 broadcast = {kl, kl, kl, kl};
+    constexpr Mask4 lane_k = {kl == 0 ? -1 : 0, kl == 1 ? -1 : 0, kl == 2 ? -1 : 0, kl == 3 ? -1 : 0};
+    const Real4 inverse = {inverse_pivot, inverse_pivot, inverse_pivot, inverse_pivot};
     Real4 row[blocks];
-    for (int b = 0; b < blocks; ++b) row[b] = rows_[K][b] * inverse_pivot;
+    for (int b = 0; b < blocks; ++b) row[b] = rows_[K][b] * inverse;
+    row[kb] = lane_k ? inverse : row[kb];
     for (int i = 0; i < M; ++i) {
       if (i == K) continue;
-      const Real factor = rows_[i][kb][kl];
-      rows_[i][kb][kl] = 0.0;
-      for (int b = 0; b < blocks; ++b) rows_[i][b] -= factor * row[b];
+      const Real4 factor = __builtin_shuffle(rows_[i][kb], broadcast);
+      const Real4 column = -factor * inverse;  // the new entry (i, K)
+      for (int b = 0; b < blocks; ++b) rows_[i][b] = fused_subtract(factor, row[b], rows_[i][b]);
+      rows_[i][kb] = lane_k ? column : rows_[i][kb];
     }
     for (int b = 0; b < blocks; ++b) rows_[K][b] = row[b];
     return true;
+  }
+
+  /// c - a * b, fused where the CPU has FMA (the build turns off the compiler's own contraction).
+  static Real4 fused_subtract(const Real4& a, const Real4& b, const Real4& c) {
+#ifdef __FMA__
+    return __builtin_ia32_vfnmaddpd256(a, b, c);
+#else
+    return c - a * b;
+#endif
   }
 
   /// Left-looking Cholesky of A_s by rows, then T = L^-1 S by rows. (Out of line: only the orthonormal
