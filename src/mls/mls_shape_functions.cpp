@@ -918,6 +918,42 @@ bool MlsShapeFunctions::evaluate_kernel(const Vec3& x_in, int derivative_order, 
       for (Index l = 0; l < lanes; ++l)
         for (int i = 0; i < Dim; ++i) dphi[3 * (j + l) + i] = d[i][l];
     });
+    // Constant consistency made exact: sum_J phi_J,i = 0 holds only to about eps cond(A) |phi_,i| after the
+    // solves, so a rigid translation would strain every quadrature point a little, and in a stiff,
+    // ill-conditioned body (a thin cantilever: cond(K) ~ 1e13) the support reaction then misses the
+    // applied load by 1e-3. phi_J,i -= phi_J sum_K phi_K,i (sum_J phi_J = 1) removes that part; the change
+    // is of the size of the rounding.
+    Real total[3] = {0.0, 0.0, 0.0};
+    Index j = 0;
+    if constexpr (Dim == 3) {  // four nodes (12 interleaved values) at a time
+      using Lanes = std::int64_t __attribute__((vector_size(32)));
+      Real4 s0 = {0.0, 0.0, 0.0, 0.0}, s1 = s0, s2 = s0;  // lanes: x y z x | y z x y | z x y z
+      for (; j + 4 <= n; j += 4) {
+        const Real* d = dphi + 3 * j;
+        s0 += load4(d);
+        s1 += load4(d + 4);
+        s2 += load4(d + 8);
+      }
+      for (Index k = j; k < n; ++k)
+        for (int i = 0; i < 3; ++i) total[i] += dphi[3 * k + i];
+      total[0] += (s0[0] + s0[3]) + (s1[2] + s2[1]);
+      total[1] += (s0[1] + s1[0]) + (s1[3] + s2[2]);
+      total[2] += (s0[2] + s1[1]) + (s2[0] + s2[3]);
+      const Real4 t0 = {total[0], total[1], total[2], total[0]}, t1 = {total[1], total[2], total[0], total[1]},
+                  t2 = {total[2], total[0], total[1], total[2]};
+      for (j = 0; j + 4 <= n; j += 4) {
+        const Real4 p = load4(phi + j);
+        Real* d = dphi + 3 * j;
+        store4(d, multiply_add(-__builtin_shuffle(p, Lanes{0, 0, 0, 1}), t0, load4(d)));
+        store4(d + 4, multiply_add(-__builtin_shuffle(p, Lanes{1, 1, 2, 2}), t1, load4(d + 4)));
+        store4(d + 8, multiply_add(-__builtin_shuffle(p, Lanes{2, 3, 3, 3}), t2, load4(d + 8)));
+      }
+    } else {
+      for (Index k = 0; k < n; ++k)
+        for (int i = 0; i < Dim; ++i) total[i] += dphi[3 * k + i];
+    }
+    for (; j < n; ++j)
+      for (int i = 0; i < Dim; ++i) dphi[3 * j + i] -= phi[j] * total[i];
   }
   if (derivative_order < 2) {
     out.ddphi.resize(6, 0);
