@@ -3,9 +3,12 @@
 // block pattern, the volume stiffness and loads, the penalty scale and the constraint terms (penalty,
 // Nitsche or Lagrange multipliers); solve: CHOLMOD (symmetric) or the general solver; energy: strain
 // energy, Clapeyron external work and the constraint reactions.
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <iterator>
 
 #include "core/error.hpp"
@@ -199,8 +202,6 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
   }
 
   // constraint terms
-  Eigen::MatrixXd Kc;
-  Eigen::VectorXd fc;
   auto& multiplier_entries = system.multiplier_entries;
   Eigen::VectorXd& multiplier_rhs = system.multiplier_rhs;
   Index& multipliers = system.multipliers;
@@ -222,42 +223,100 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       }
     }
   } else if (adds_boundary) {
-    // consecutive points with the same neighbours (the Gauss points of one boundary cell face) add up in
-    // one block, scattered once: the scatter's pattern search, not the terms, was the cost. A group of
-    // Nitsche points goes straight into the matrix (scatter_nitsche_products), one with penalty terms
-    // through a dense block.
-    NitscheColumns nitsche;
+    // Consecutive points with the same neighbours (the Gauss points of one boundary cell face) form a group
+    // whose terms are added once: a Nitsche group straight into the matrix (scatter_nitsche_products), one
+    // with penalty terms through a dense block. Each thread takes a contiguous share of the groups into its
+    // own copy of the values they touch (a group's products stay in the cache of the core that formed
+    // them); the copies are summed in thread order, so the result is deterministic for a thread count.
+    std::vector<std::pair<std::size_t, std::size_t>> groups;
     for (std::size_t i = 0; i < constraint_points_.size();) {
-      const auto& group = constraint_shapes[i];
-      const Index size = 3 * static_cast<Index>(group.neighbours.size());
       std::size_t end = i;
-      while (end < constraint_points_.size() && constraint_shapes[end].neighbours == group.neighbours) ++end;
-      bool penalty = false;
-      for (std::size_t j = i; j < end; ++j)
-        penalty |= !(options.essential == EssentialMethod::nitsche && constraint_points_[j].surface);
-      nitsche.reset(size / 3, static_cast<Index>(end - i));
-      fc.setZero(size);
-      if (penalty) Kc.setZero(size, size);
-      for (std::size_t j = i; j < end; ++j) {
-        const auto& p = constraint_points_[j];
-        const auto& sv = constraint_shapes[j];
-        if (options.essential == EssentialMethod::nitsche && p.surface) {
-          const auto& mat = materials_[static_cast<std::size_t>(p.material)];
-          const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
-          nitsche_columns(sv, p, mat, beta, nitsche, fc);
-        } else {
-          penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
-        }
-      }
-      if (penalty) {
-        add_nitsche_products(nitsche, Kc);
-        pattern.scatter(group.neighbours, Kc, values);
-      } else {
-        scatter_nitsche_products(nitsche, pattern, group.neighbours, values);
-      }
-      scatter_vector(group, fc, f);
+      while (end < constraint_points_.size() && constraint_shapes[end].neighbours == constraint_shapes[i].neighbours) ++end;
+      groups.emplace_back(i, end);
       i = end;
     }
+    const int threads = omp_get_max_threads();
+    std::vector<std::vector<Real>> partial(static_cast<std::size_t>(threads));
+    std::vector<std::pair<Index, Index>> ranges(static_cast<std::size_t>(threads), {0, 0});
+    std::vector<Eigen::VectorXd> partial_f(static_cast<std::size_t>(threads));
+    std::exception_ptr failure;
+    int team_size = 1;
+#pragma omp parallel num_threads(threads)
+    {
+      const int t = omp_get_thread_num(), team = omp_get_num_threads();
+#pragma omp single
+      team_size = team;
+      const std::size_t first = groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
+      const std::size_t last = groups.size() * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(team);
+      try {
+        Index low = pattern.nonzeros(), high = 0;
+        for (std::size_t g = first; g < last; ++g) {
+          const auto [lo, hi] = pattern.value_range(constraint_shapes[groups[g].first].neighbours);
+          low = std::min(low, lo);
+          high = std::max(high, hi);
+        }
+        if (high < low) low = high = 0;
+        std::vector<Real>& mine = partial[static_cast<std::size_t>(t)];
+        mine.assign(static_cast<std::size_t>(high - low), 0.0);
+        ranges[static_cast<std::size_t>(t)] = {low, high};
+        Eigen::VectorXd& my_f = partial_f[static_cast<std::size_t>(t)];
+        my_f = Eigen::VectorXd::Zero(3 * n);
+        NitscheColumns nitsche;
+        Eigen::MatrixXd Kc;
+        Eigen::VectorXd fc;
+        for (std::size_t g = first; g < last; ++g) {
+          const auto [i, end] = groups[g];
+          const auto& group = constraint_shapes[i];
+          const Index size = 3 * static_cast<Index>(group.neighbours.size());
+          bool penalty = false;
+          for (std::size_t j = i; j < end; ++j)
+            penalty |= !(options.essential == EssentialMethod::nitsche && constraint_points_[j].surface);
+          nitsche.reset(size / 3, static_cast<Index>(end - i));
+          fc.setZero(size);
+          if (penalty) Kc.setZero(size, size);
+          for (std::size_t j = i; j < end; ++j) {
+            const auto& p = constraint_points_[j];
+            const auto& sv = constraint_shapes[j];
+            if (options.essential == EssentialMethod::nitsche && p.surface) {
+              const auto& mat = materials_[static_cast<std::size_t>(p.material)];
+              const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
+              nitsche_columns(sv, p, mat, beta, nitsche, fc);
+            } else {
+              penalty_terms(sv, p, p.surface ? alpha_surface_ : alpha_point_, Kc, fc);
+            }
+          }
+          if (penalty) {
+            add_nitsche_products(nitsche, Kc);
+            pattern.scatter(group.neighbours, Kc, mine.data(), low);
+          } else {
+            scatter_nitsche_products(nitsche, pattern, group.neighbours, mine.data(), low);
+          }
+          scatter_vector(group, fc, my_f);
+        }
+      } catch (...) {
+#pragma omp critical(lamina_efg_boundary_failure)
+        if (!failure) failure = std::current_exception();
+      }
+    }
+    if (failure) std::rethrow_exception(failure);
+    Index low = pattern.nonzeros(), high = 0;
+    for (int t = 0; t < team_size; ++t) {
+      const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
+      if (hi > lo) {
+        low = std::min(low, lo);
+        high = std::max(high, hi);
+      }
+    }
+#pragma omp parallel for schedule(static)
+    for (Index v = low; v < high; ++v) {
+      Real sum = 0.0;
+      for (int t = 0; t < team_size; ++t) {
+        const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
+        if (v >= lo && v < hi) sum += partial[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
+      }
+      values[v] += sum;
+    }
+    for (int t = 0; t < team_size; ++t) f += partial_f[static_cast<std::size_t>(t)];
   }
   timings_["assembly_boundary_s"] = seconds_since(start);
   timings_["assembly_s"] = timings_["neighbours_s"] + timings_["pattern_s"] + volume_seconds + timings_["assembly_boundary_s"] +

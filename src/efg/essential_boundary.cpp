@@ -89,7 +89,7 @@ void add_nitsche_products(NitscheColumns& columns, Eigen::MatrixXd& K) {
 }
 
 void scatter_nitsche_products(NitscheColumns& columns, const solve::BlockPattern& pattern, const IndexList& nodes,
-                              Real* values) {
+                              Real* values, Index offset) {
   columns.form_products();
   const Index m = static_cast<Index>(nodes.size());
   const bool symmetric = pattern.symmetric();
@@ -104,7 +104,7 @@ void scatter_nitsche_products(NitscheColumns& columns, const solve::BlockPattern
     for (Index k = 0; k < neighbours; ++k) rank_of[static_cast<std::size_t>(neighbour[k])] = static_cast<int>(k);
     const Index end = symmetric ? jj + 1 : m;
     Index start[3];
-    for (int b = 0; b < 3; ++b) start[b] = pattern.column_start(3 * J + b);
+    for (int b = 0; b < 3; ++b) start[b] = pattern.column_start(3 * J + b) - offset;
     for (Index ii = 0; ii < end; ++ii) {
       const Index I = nodes[static_cast<std::size_t>(ii)];
       const Index rank = rank_of[static_cast<std::size_t>(I)];

@@ -91,10 +91,9 @@ void nitsche_columns(const mls::ShapeFunctionValues& sv, const ConstraintPoint& 
 /// K += N V^T + V N^T into a dense 3m x 3m block (for groups that also hold penalty terms).
 void add_nitsche_products(NitscheColumns& columns, Eigen::MatrixXd& K);
 /// The same added straight into the values of a global matrix with `pattern`, over the group's nodes
-/// (sorted ascending, every pair of them in the pattern). Symmetric patterns take the upper triangle.
-/// (Serial: shared between the two OpenMP threads of this machine, a group's products and its scatter each
-/// took as long per thread as on one.)
+/// (sorted ascending, every pair of them in the pattern) at values[index - offset]. Symmetric patterns take
+/// the upper triangle.
 void scatter_nitsche_products(NitscheColumns& columns, const solve::BlockPattern& pattern, const IndexList& nodes,
-                              Real* values);
+                              Real* values, Index offset = 0);
 
 }  // namespace lamina::efg
