@@ -235,30 +235,42 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       groups.emplace_back(i, end);
       i = end;
     }
-    const int threads = omp_get_max_threads();
-    std::vector<std::vector<Real>> partial(static_cast<std::size_t>(threads));
+    // the value range each thread's share touches; the copies only while they stay small (a boundary face's
+    // nodes span most of the matrix: on a large body every copy is nearly a whole matrix), else one thread
+    // adds straight into the values
+    int threads = omp_get_max_threads();
     std::vector<std::pair<Index, Index>> ranges(static_cast<std::size_t>(threads), {0, 0});
+    std::size_t copied = 0;
+    for (int t = 0; t < threads; ++t) {
+      Index low = pattern.nonzeros(), high = 0;
+      for (std::size_t g = groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(threads);
+           g < groups.size() * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(threads); ++g) {
+        const auto [lo, hi] = pattern.value_range(constraint_shapes[groups[g].first].neighbours);
+        low = std::min(low, lo);
+        high = std::max(high, hi);
+      }
+      if (high < low) low = high = 0;
+      ranges[static_cast<std::size_t>(t)] = {low, high};
+      copied += static_cast<std::size_t>(high - low);
+    }
+    constexpr std::size_t most_copied = std::size_t{1} << 22;  // values (32 MiB)
+    const bool copies = threads > 1 && copied <= most_copied;
+    if (!copies) {
+      threads = 1;
+      ranges.assign(1, {0, pattern.nonzeros()});
+    }
+    std::vector<std::vector<Real>> partial(static_cast<std::size_t>(threads));
     std::vector<Eigen::VectorXd> partial_f(static_cast<std::size_t>(threads));
     std::exception_ptr failure;
-    int team_size = 1;
 #pragma omp parallel num_threads(threads)
-    {
-      const int t = omp_get_thread_num(), team = omp_get_num_threads();
-#pragma omp single
-      team_size = team;
-      const std::size_t first = groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
-      const std::size_t last = groups.size() * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(team);
+    for (int t = omp_get_thread_num(); t < threads; t += omp_get_num_threads()) {  // share t (a smaller team: several)
+      const std::size_t first = groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(threads);
+      const std::size_t last = groups.size() * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(threads);
       try {
-        Index low = pattern.nonzeros(), high = 0;
-        for (std::size_t g = first; g < last; ++g) {
-          const auto [lo, hi] = pattern.value_range(constraint_shapes[groups[g].first].neighbours);
-          low = std::min(low, lo);
-          high = std::max(high, hi);
-        }
-        if (high < low) low = high = 0;
+        const Index low = ranges[static_cast<std::size_t>(t)].first, high = ranges[static_cast<std::size_t>(t)].second;
         std::vector<Real>& mine = partial[static_cast<std::size_t>(t)];
-        mine.assign(static_cast<std::size_t>(high - low), 0.0);
-        ranges[static_cast<std::size_t>(t)] = {low, high};
+        if (copies) mine.assign(static_cast<std::size_t>(high - low), 0.0);
+        Real* target = copies ? mine.data() : values;
         Eigen::VectorXd& my_f = partial_f[static_cast<std::size_t>(t)];
         my_f = Eigen::VectorXd::Zero(3 * n);
         NitscheColumns nitsche;
@@ -287,9 +299,9 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
           }
           if (penalty) {
             add_nitsche_products(nitsche, Kc);
-            pattern.scatter(group.neighbours, Kc, mine.data(), low);
+            pattern.scatter(group.neighbours, Kc, target, low);
           } else {
-            scatter_nitsche_products(nitsche, pattern, group.neighbours, mine.data(), low);
+            scatter_nitsche_products(nitsche, pattern, group.neighbours, target, low);
           }
           scatter_vector(group, fc, my_f);
         }
@@ -299,24 +311,24 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       }
     }
     if (failure) std::rethrow_exception(failure);
-    Index low = pattern.nonzeros(), high = 0;
-    for (int t = 0; t < team_size; ++t) {
-      const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
-      if (hi > lo) {
-        low = std::min(low, lo);
-        high = std::max(high, hi);
-      }
-    }
+    if (copies) {
+      Index low = pattern.nonzeros(), high = 0;
+      for (const auto& [lo, hi] : ranges)
+        if (hi > lo) {
+          low = std::min(low, lo);
+          high = std::max(high, hi);
+        }
 #pragma omp parallel for schedule(static)
-    for (Index v = low; v < high; ++v) {
-      Real sum = 0.0;
-      for (int t = 0; t < team_size; ++t) {
-        const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
-        if (v >= lo && v < hi) sum += partial[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
+      for (Index v = low; v < high; ++v) {
+        Real sum = 0.0;
+        for (int t = 0; t < threads; ++t) {
+          const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
+          if (v >= lo && v < hi) sum += partial[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
+        }
+        values[v] += sum;
       }
-      values[v] += sum;
     }
-    for (int t = 0; t < team_size; ++t) f += partial_f[static_cast<std::size_t>(t)];
+    for (int t = 0; t < threads; ++t) f += partial_f[static_cast<std::size_t>(t)];
   }
   timings_["assembly_boundary_s"] = seconds_since(start);
   timings_["assembly_s"] = timings_["neighbours_s"] + timings_["pattern_s"] + volume_seconds + timings_["assembly_boundary_s"] +
