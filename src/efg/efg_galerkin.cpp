@@ -228,6 +228,8 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
     // with penalty terms through a dense block. Each thread takes a contiguous share of the groups into its
     // own copy of the values they touch (a group's products stay in the cache of the core that formed
     // them); the copies are summed in thread order, so the result is deterministic for a thread count.
+    // Nitsche where it is the method and the point is on a surface; the penalty form elsewhere
+    const auto nitsche_point = [&](const ConstraintPoint& p) { return options.essential == EssentialMethod::nitsche && p.surface; };
     std::vector<std::pair<std::size_t, std::size_t>> groups;
     for (std::size_t i = 0; i < constraint_points_.size();) {
       std::size_t end = i;
@@ -239,12 +241,13 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
     // nodes span most of the matrix: on a large body every copy is nearly a whole matrix), else one thread
     // adds straight into the values
     int threads = omp_get_max_threads();
+    // share t: groups [share(t), share(t + 1))
+    const auto share = [&](int t) { return groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(threads); };
     std::vector<std::pair<Index, Index>> ranges(static_cast<std::size_t>(threads), {0, 0});
     std::size_t copied = 0;
     for (int t = 0; t < threads; ++t) {
       Index low = pattern.nonzeros(), high = 0;
-      for (std::size_t g = groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(threads);
-           g < groups.size() * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(threads); ++g) {
+      for (std::size_t g = share(t); g < share(t + 1); ++g) {
         const auto [lo, hi] = pattern.value_range(constraint_shapes[groups[g].first].neighbours);
         low = std::min(low, lo);
         high = std::max(high, hi);
@@ -264,8 +267,6 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
     std::exception_ptr failure;
 #pragma omp parallel num_threads(threads)
     for (int t = omp_get_thread_num(); t < threads; t += omp_get_num_threads()) {  // share t (a smaller team: several)
-      const std::size_t first = groups.size() * static_cast<std::size_t>(t) / static_cast<std::size_t>(threads);
-      const std::size_t last = groups.size() * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(threads);
       try {
         const Index low = ranges[static_cast<std::size_t>(t)].first, high = ranges[static_cast<std::size_t>(t)].second;
         std::vector<Real>& mine = partial[static_cast<std::size_t>(t)];
@@ -276,20 +277,19 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
         NitscheColumns nitsche;
         Eigen::MatrixXd Kc;
         Eigen::VectorXd fc;
-        for (std::size_t g = first; g < last; ++g) {
+        for (std::size_t g = share(t); g < share(t + 1); ++g) {
           const auto [i, end] = groups[g];
           const auto& group = constraint_shapes[i];
           const Index size = 3 * static_cast<Index>(group.neighbours.size());
           bool penalty = false;
-          for (std::size_t j = i; j < end; ++j)
-            penalty |= !(options.essential == EssentialMethod::nitsche && constraint_points_[j].surface);
+          for (std::size_t j = i; j < end; ++j) penalty |= !nitsche_point(constraint_points_[j]);
           nitsche.reset(size / 3, static_cast<Index>(end - i));
           fc.setZero(size);
           if (penalty) Kc.setZero(size, size);
           for (std::size_t j = i; j < end; ++j) {
             const auto& p = constraint_points_[j];
             const auto& sv = constraint_shapes[j];
-            if (options.essential == EssentialMethod::nitsche && p.surface) {
+            if (nitsche_point(p)) {
               const auto& mat = materials_[static_cast<std::size_t>(p.material)];
               const Real beta = options.nitsche_factor * mat.p_wave_modulus() / std::max(p.size, 1e-300);
               nitsche_columns(sv, p, mat, beta, nitsche, fc);
