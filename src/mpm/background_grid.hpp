@@ -59,19 +59,32 @@ class BackgroundGrid {
   template <class Finish>
   void scatter_and_finish(const Eigen::VectorXd& mass, const PointMatrix& velocity, const PointMatrix& force,
                           const Eigen::Matrix3Xd& mask, Finish&& finish) const {
-    const Index active = active_nodes();
-#pragma omp parallel for schedule(static) if (active > 4096)
-    for (Index s = 0; s < active; ++s) {
-      Vec3 m = Vec3::Zero(), p = Vec3::Zero(), f = Vec3::Zero();
-      for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
-        const Index c = *e / kNodesPerCorner;
-        const Real w = weight_[static_cast<std::size_t>(*e)];
+    const Index active = active_nodes(), corners = mass.size();
+    // each corner's three masked terms packed once into 9 adjacent values: a slot's entries then read one
+    // record per corner instead of four arrays (the same products, so the same bits as forming them per entry)
+    corner_terms_.resize(static_cast<std::size_t>(9 * corners));
+    Real* terms = corner_terms_.data();
+#pragma omp parallel if (active > 4096)
+    {
+#pragma omp for schedule(static)
+      for (Index c = 0; c < corners; ++c) {
         const Vec3 free = mask.col(c);
-        m += w * (Vec3::Constant(mass[c])).cwiseProduct(free);
-        p += w * (mass[c] * velocity.col(c)).cwiseProduct(free);
-        f += w * force.col(c).cwiseProduct(free);
+        Eigen::Map<Vec3>(terms + 9 * c) = Vec3::Constant(mass[c]).cwiseProduct(free);
+        Eigen::Map<Vec3>(terms + 9 * c + 3) = (mass[c] * velocity.col(c)).cwiseProduct(free);
+        Eigen::Map<Vec3>(terms + 9 * c + 6) = force.col(c).cwiseProduct(free);
       }
-      finish(s, m, p, f);
+#pragma omp for schedule(static)
+      for (Index s = 0; s < active; ++s) {
+        Vec3 m = Vec3::Zero(), p = Vec3::Zero(), f = Vec3::Zero();
+        for (const Index* e = slot_entries_begin(s); e != slot_entries_end(s); ++e) {
+          const Real* t = terms + 9 * (*e / kNodesPerCorner);
+          const Real w = weight_[static_cast<std::size_t>(*e)];
+          m += w * Eigen::Map<const Vec3>(t);
+          p += w * Eigen::Map<const Vec3>(t + 3);
+          f += w * Eigen::Map<const Vec3>(t + 6);
+        }
+        finish(s, m, p, f);
+      }
     }
   }
 
@@ -116,6 +129,7 @@ class BackgroundGrid {
   std::vector<std::pair<std::int64_t, Index>> moved_, merged_;  // scratch of locate()'s re-sort
   std::vector<char> corner_moved_;                            // corner changed cell in this locate()
   std::vector<Index> slot_begin_{0};
+  mutable std::vector<Real> corner_terms_;  // scatter_and_finish's packed corner terms (kept: no allocation per step)
   Index connectivity_version_ = 0;
   std::vector<std::int64_t> slot_key_;
 };

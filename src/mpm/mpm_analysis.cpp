@@ -437,8 +437,12 @@ void MpmAnalysis::prepare_loads() {
 }
 
 void MpmAnalysis::compute_external_forces(Real load) {
-  f_ext_.setZero();
-  m_ext_.setZero();
+  const Index n = f_ext_.cols();
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (Index i = 0; i < n; ++i) {
+    f_ext_.col(i).setZero();
+    m_ext_.col(i).setZero();
+  }
   const ShellMesh& mesh = problem_.mesh;
   const Real s = problem_.options.analysis == MpmOptions::Kind::quasi_static ? load : time_ / problem_.options.end_time;
   for (std::size_t k = 0; k < problem_.loads.size(); ++k) {

@@ -265,7 +265,11 @@ std::array<Real, Q> MpmAnalysis::node_sums(const Terms& terms) const {
   const Index n = x_.cols(), chunks = (n + kSumChunk - 1) / kSumChunk;
   std::vector<Real>& partial = sum_partials_;
   partial.assign(static_cast<std::size_t>(Q * chunks), 0.0);
-  for (Index k = node_first_ / kSumChunk; k * kSumChunk < node_last_; ++k) {
+  // chunks in parallel: each writes its own partial, summed in chunk order below (the same bits for any
+  // thread count)
+  const Index first_chunk = node_first_ / kSumChunk, end_chunk = (node_last_ + kSumChunk - 1) / kSumChunk;
+#pragma omp parallel for schedule(static) if (end_chunk - first_chunk > 16)
+  for (Index k = first_chunk; k < end_chunk; ++k) {
     std::array<Real, Q> chunk{};
     for (Index i = k * kSumChunk; i < std::min(n, (k + 1) * kSumChunk); ++i) terms(i, chunk);
     std::copy(chunk.begin(), chunk.end(), partial.begin() + Q * k);

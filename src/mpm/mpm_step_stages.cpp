@@ -86,8 +86,13 @@ void MpmAnalysis::stage_loads_and_residual() {
   compute_external_forces(current_load_);
   const Real c = scaled_ && o.adaptive_damping ? adaptive_c_ : o.mass_damping;
   step_.damping = c;
-  f_net_ = f_ext_ - f_int_;
-  m_net_ = m_ext_ - m_int_;
+  f_net_.resize(3, n);
+  m_net_.resize(3, n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (Index i = 0; i < n; ++i) {
+    f_net_.col(i) = f_ext_.col(i) - f_int_.col(i);
+    m_net_.col(i) = m_ext_.col(i) - m_int_.col(i);
+  }
   {
     // adaptive damping: the damping force c m v joins the imbalance, so that a node swinging through
     // equilibrium (zero residual at full velocity) does not end the level
@@ -222,8 +227,14 @@ void MpmAnalysis::stage_damping_and_energy() {
 
 // 7. positions (eq (9)) and grid connectivity; a non-finite energy stops the run.
 void MpmAnalysis::stage_position_update() {
-  x_ += step_.dt * vpos_;
-  if (scaled_) theta_ += step_.dt * omega_;
+  const Index n = x_.cols();
+  const Real dt = step_.dt;
+  const bool rotations = scaled_;
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (Index i = 0; i < n; ++i) {
+    x_.col(i) += dt * vpos_.col(i);
+    if (rotations) theta_.col(i) += dt * omega_.col(i);
+  }
   locate_grid();
   if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
     throw AnalysisError(fmt::format("non-finite energy at step {} (time {:.6g}): the run is unstable", steps_, time_));

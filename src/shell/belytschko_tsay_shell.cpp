@@ -122,9 +122,14 @@ ShellResultants BelytschkoTsayShell::resultants(const Real* stress, Real thickne
 ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMatrix& v, const NodeMatrix& omega, Real dt,
                                                Real* stress, Real* hourglass, Real& thickness) const {
   ShellElementResult out;
+  const auto mark_invalid = [&out] {
+    out.valid = false;
+    out.force.setZero();
+    out.moment.setZero();
+  };
   Mat3 R;
   if (!corotational_frame(x, R)) {
-    out.valid = false;
+    mark_invalid();
     return out;
   }
   // local coordinates (origin at the centroid), velocities, angular velocities (eq (17))
@@ -139,7 +144,7 @@ ShellElementResult BelytschkoTsayShell::update(const NodeMatrix& x, const NodeMa
 
   const Real area2 = (xh(2) - xh(0)) * (yh(3) - yh(1)) + (xh(1) - xh(3)) * (yh(2) - yh(0));
   if (!(area2 > 0.0) || !std::isfinite(area2)) {
-    out.valid = false;
+    mark_invalid();
     return out;
   }
   const Real area = 0.5 * area2;
