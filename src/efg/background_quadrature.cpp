@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <functional>
 #include <numbers>
 #include <optional>
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include "core/error.hpp"
 #include "core/gauss_legendre.hpp"
@@ -357,43 +359,99 @@ CellFaceQuadrature cell_face_quadrature(const BackgroundCells& cells, const std:
   return result;
 }
 
-SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
-                                        const std::array<int, 3>& gauss, int split,
-                                        const std::function<bool(const Vec3&, int)>& selected) {
+namespace {
+
+/// refine_selected_faces over the faces (runs of base points of one cell face) on `threads` threads, each
+/// with its own selector; every face's points are kept apart and joined in face order, so the result does
+/// not depend on the thread count.
+SurfaceQuadrature refine_faces(const BackgroundCells& cells, const SurfaceQuadrature& base, const std::array<int, 3>& gauss,
+                               int split, const SelectorFactory& make_selected, int threads) {
   std::array<std::vector<Real>, 3> xi, wi;
   for (int d = 0; d < 3; ++d) gauss_legendre(gauss[d], xi[d], wi[d]);
-  std::vector<Vec3> points, normals;
-  std::vector<Real> weights, sizes;
-  SurfaceQuadrature q;
-  Index s = 0;
-  while (s < base.size()) {
-    // the points of one face are consecutive
+  std::vector<Index> face_begin;  // the points of one face are consecutive
+  for (Index s = 0; s < base.size();) {
+    face_begin.push_back(s);
     Index e = s;
     while (e < base.size() && base.cell[static_cast<std::size_t>(e)] == base.cell[static_cast<std::size_t>(s)] &&
            base.face[static_cast<std::size_t>(e)] == base.face[static_cast<std::size_t>(s)])
       ++e;
-    int hits = 0;
-    for (Index i = s; i < e; ++i) hits += selected(base.points.col(i), base.face[static_cast<std::size_t>(i)]) ? 1 : 0;
-    const int face = base.face[static_cast<std::size_t>(s)];
-    const Index c = base.cell[static_cast<std::size_t>(s)];
-    // A face where the selection holds at every base point and at the face's own sample points (set in
-    // from its edges and corners) is taken whole; every other face is split and tested sub-face by
-    // sub-face (a region smaller than a cell may hold at none of the base points).
-    bool all = hits == e - s;
-    if (all) {
-      const int d = face / 2, a = (d + 1) % 3, b = (d + 2) % 3;
-      Vec3 lo, hi;
-      cells.bounds(c, lo, hi);
-      const FaceSelection whole{cells, d, a, b, face, face % 2 == 0 ? lo[d] : hi[d], selected, xi[a], xi[b]};
-      int count = 0;
-      Real sum_s = 0, sum_t = 0;
-      all = whole.sample(lo[a], hi[a], lo[b], hi[b], count, sum_s, sum_t) == count;
-    }
-    append_face(cells, c, face / 2, face % 2, gauss, all ? 1 : split, xi, wi, q, points, normals, weights, sizes,
-                all ? nullptr : &selected);
     s = e;
   }
+  face_begin.push_back(base.size());
+  const auto faces = static_cast<Index>(face_begin.size()) - 1;
+  struct FacePoints {
+    SurfaceQuadrature q;  // face and cell of each point
+    std::vector<Vec3> points, normals;
+    std::vector<Real> weights, sizes;
+  };
+  std::vector<FacePoints> parts(static_cast<std::size_t>(faces));
+  std::exception_ptr failure;
+#pragma omp parallel num_threads(threads) if (threads > 1 && faces > 1)
+  {
+    std::function<bool(const Vec3&, int)> selected;
+    try {
+      selected = make_selected();
+    } catch (...) {
+#pragma omp critical(lamina_refine_faces_failure)
+      if (!failure) failure = std::current_exception();
+    }
+#pragma omp for schedule(dynamic, 4)
+    for (Index f = 0; f < faces; ++f) {
+      if (!selected) continue;
+      try {
+        const Index s = face_begin[static_cast<std::size_t>(f)], e = face_begin[static_cast<std::size_t>(f + 1)];
+        int hits = 0;
+        for (Index i = s; i < e; ++i) hits += selected(base.points.col(i), base.face[static_cast<std::size_t>(i)]) ? 1 : 0;
+        const int face = base.face[static_cast<std::size_t>(s)];
+        const Index c = base.cell[static_cast<std::size_t>(s)];
+        // A face where the selection holds at every base point and at the face's own sample points (set in
+        // from its edges and corners) is taken whole; every other face is split and tested sub-face by
+        // sub-face (a region smaller than a cell may hold at none of the base points).
+        bool all = hits == e - s;
+        if (all) {
+          const int d = face / 2, a = (d + 1) % 3, b = (d + 2) % 3;
+          Vec3 lo, hi;
+          cells.bounds(c, lo, hi);
+          const FaceSelection whole{cells, d, a, b, face, face % 2 == 0 ? lo[d] : hi[d], selected, xi[a], xi[b]};
+          int count = 0;
+          Real sum_s = 0, sum_t = 0;
+          all = whole.sample(lo[a], hi[a], lo[b], hi[b], count, sum_s, sum_t) == count;
+        }
+        FacePoints& part = parts[static_cast<std::size_t>(f)];
+        append_face(cells, c, face / 2, face % 2, gauss, all ? 1 : split, xi, wi, part.q, part.points, part.normals,
+                    part.weights, part.sizes, all ? nullptr : &selected);
+      } catch (...) {
+#pragma omp critical(lamina_refine_faces_failure)
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+  SurfaceQuadrature q;
+  std::vector<Vec3> points, normals;
+  std::vector<Real> weights, sizes;
+  for (const FacePoints& part : parts) {
+    q.face.insert(q.face.end(), part.q.face.begin(), part.q.face.end());
+    q.cell.insert(q.cell.end(), part.q.cell.begin(), part.q.cell.end());
+    points.insert(points.end(), part.points.begin(), part.points.end());
+    normals.insert(normals.end(), part.normals.begin(), part.normals.end());
+    weights.insert(weights.end(), part.weights.begin(), part.weights.end());
+    sizes.insert(sizes.end(), part.sizes.begin(), part.sizes.end());
+  }
   return finish(std::move(q), points, normals, weights, sizes);
+}
+
+}  // namespace
+
+SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
+                                        const std::array<int, 3>& gauss, int split, const SelectorFactory& make_selected) {
+  return refine_faces(cells, base, gauss, split, make_selected, omp_get_max_threads());
+}
+
+SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
+                                        const std::array<int, 3>& gauss, int split,
+                                        const std::function<bool(const Vec3&, int)>& selected) {
+  return refine_faces(cells, base, gauss, split, [&selected] { return selected; }, 1);
 }
 
 }  // namespace lamina::efg

@@ -86,8 +86,15 @@ CellFaceQuadrature cell_face_quadrature(const BackgroundCells& cells, const std:
 /// crosses is bisected 6 more levels to find the selected part's area and centroid, where it gets one
 /// point (so a load's resultant and its moment follow the region to about 1 / (split 2^6) of the cell,
 /// whatever the node spacing).
+/// This form runs on one thread (`selected` need not be thread-safe).
 SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
                                         const std::array<int, 3>& gauss, int split,
                                         const std::function<bool(const Vec3&, int)>& selected);
+/// Makes one selector per thread (a muParser expression is not thread-safe).
+using SelectorFactory = std::function<std::function<bool(const Vec3&, int)>()>;
+/// The same faces on the OpenMP threads, each testing with its own selector from `make_selected`; the
+/// result does not depend on the thread count.
+SurfaceQuadrature refine_selected_faces(const BackgroundCells& cells, const SurfaceQuadrature& base,
+                                        const std::array<int, 3>& gauss, int split, const SelectorFactory& make_selected);
 
 }  // namespace lamina::efg

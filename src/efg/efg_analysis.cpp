@@ -311,6 +311,14 @@ void EfgAnalysis::assign_materials() {
   }
 }
 
+SelectorFactory EfgAnalysis::surface_selector(const model::Selection& region, Real tolerance) const {
+  return [this, &region, tolerance] {
+    auto test = std::make_shared<const RegionTest>(region, &cells_->map, [this](const Vec3& x) { return nearest_node(x); },
+                                                   tolerance);
+    return std::function<bool(const Vec3&, int)>([test](const Vec3& x, int face) { return test->on_surface(x, face); });
+  };
+}
+
 void EfgAnalysis::build_constraints() {
   constraint_points_.clear();
   const auto method = problem_.options.essential;
@@ -334,9 +342,8 @@ void EfgAnalysis::build_constraints() {
     if (surface_methods) {
       RegionTest test(c.select, &cells_->map, [this](const Vec3& x) { return nearest_node(x); }, tolerance);
       if (test.can_select_surface()) {
-        const SurfaceQuadrature part = refine_selected_faces(
-            *cells_, surface_, problem_.options.gauss, kSurfaceSplit,
-            [&](const Vec3& x, int face) { return test.on_surface(x, face); });
+        const SurfaceQuadrature part = refine_selected_faces(*cells_, surface_, problem_.options.gauss, kSurfaceSplit,
+                                                             surface_selector(c.select, tolerance));
         for (Index s = 0; s < part.size(); ++s) {
           const Vec3 x = part.points.col(s);
           ConstraintPoint p;
@@ -404,9 +411,8 @@ void EfgAnalysis::build_loads() {
         geometry::FieldEvaluator pressure(load.scalar, 1.0);
         bool any = false;
         if (test.can_select_surface()) {
-          const SurfaceQuadrature part = refine_selected_faces(
-              *cells_, surface_, problem_.options.gauss, kSurfaceSplit,
-              [&](const Vec3& x, int face) { return test.on_surface(x, face); });
+          const SurfaceQuadrature part = refine_selected_faces(*cells_, surface_, problem_.options.gauss, kSurfaceSplit,
+                                                               surface_selector(load.select, tolerance));
           for (Index s = 0; s < part.size(); ++s) {
             const Vec3 x = part.points.col(s);
             const Vec3 t = load.kind == model::Load::Kind::traction ? vector_at(x) : Vec3(-pressure(x) * part.normals.col(s));

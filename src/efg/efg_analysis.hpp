@@ -113,6 +113,8 @@ class EfgAnalysis : public Analysis {
   /// Stress of material m from the strain at x (with the projected pressure when projected).
   material::Voigt stress_of(int m, const material::Voigt& strain, const Vec3& x) const;
   Index nearest_node(const Vec3& x) const;
+  /// One RegionTest of `region` on the boundary surface per thread (refine_selected_faces).
+  SelectorFactory surface_selector(const model::Selection& region, Real tolerance) const;
   Real field_probe(const Probe& probe) const;
 
   EfgProblem problem_;

@@ -388,17 +388,27 @@ void EfgAnalysis::galerkin_energies() {
   const auto& constraint_shapes = system.constraint_shapes;
   // energies: u^T K u over the whole system minus the constraint terms
   const Eigen::VectorXd Ku = symmetric ? solve::multiply_symmetric_upper(K, u_) : Eigen::VectorXd(K * u_);
-  Real constraint_energy = 0.0;
+  const auto points = static_cast<Index>(constraint_points_.size());
   reactions_.assign(constraint_points_.size(), Vec3::Zero());
   constraint_nearest_.assign(constraint_points_.size(), 0);
-  Index row = 0;
-  for (std::size_t i = 0; i < constraint_points_.size(); ++i) {
+  std::vector<Real> point_energy(constraint_points_.size(), 0.0);  // summed in point order below
+  // Lagrange multipliers: each point's first row (the rows of its held components, in point order)
+  std::vector<Index> first_row(lagrange ? constraint_points_.size() : 0, 0);
+  for (Index i = 0, row = 0; lagrange && i < points; ++i) {
+    first_row[static_cast<std::size_t>(i)] = row;
+    for (int a = 0; a < 3; ++a) row += constraint_points_[static_cast<std::size_t>(i)].constrained[static_cast<std::size_t>(a)] ? 1 : 0;
+  }
+#pragma omp parallel for schedule(static) if (points > 64)
+  for (Index k = 0; k < points; ++k) {
+    const auto i = static_cast<std::size_t>(k);
     const auto& p = constraint_points_[i];
     const auto& sv = constraint_shapes[i];
     constraint_nearest_[i] = nearest_node(p.x);
     const Vec3 uh = value_of(sv, u_);
     Vec3 r = Vec3::Zero();
+    Real& constraint_energy = point_energy[i];
     if (lagrange) {
+      Index row = first_row[i];
       for (int a = 0; a < 3; ++a)
         if (p.constrained[static_cast<std::size_t>(a)]) r[a] = -multipliers_[row++];
     } else if (options.essential == EssentialMethod::nitsche && p.surface) {
@@ -420,6 +430,8 @@ void EfgAnalysis::galerkin_energies() {
     }
     reactions_[i] = r;
   }
+  Real constraint_energy = 0.0;
+  for (const Real e : point_energy) constraint_energy += e;
   energy_internal_ = 0.5 * (comm_.sum(u_.dot(Ku)) - constraint_energy);  // several ranks: K is the sum of their shares
   if (projection_) nodal_pressure_ = projection_->lambda.cwiseProduct(projection_->nodal_divergence(u_));
   Real reaction_work = 0.0;

@@ -28,6 +28,7 @@ struct MlsWorkspace {
   std::vector<std::pair<Real, Index>> nearest;
   std::vector<Index> positions;     // node-centred gather: cell-order positions of the neighbours
   std::vector<Index> kept_nodes;    // node-centred gather (AVX2): their node indices; grow-only
+  std::vector<std::uint64_t> node_bits;  // node-centred gather: the neighbours as bits over their index range
   bool capped = false;              // SELECT: the last gather() kept only the N nearest covering nodes
   IndexList indices;                // neighbours, ascending
   // structure of arrays, n per row (row d at d * stride): x_d - x_I,d and 1 / R_I,d of the n neighbours
@@ -479,6 +480,8 @@ MlsShapeFunctions::MlsShapeFunctions(PointMatrix nodes, MlsOptions options, Eige
       for (int d = 0; d < dimension; ++d) sorted_inverse_radii_(d, k) = 1.0 / radii_(d, cells_.order()[k]);
     sorted_order_.assign(cells_.order().begin(), cells_.order().end());
     sorted_order_.resize(static_cast<std::size_t>(count) + 4, 0);
+    position_of_node_.resize(static_cast<std::size_t>(count));
+    for (Index k = 0; k < count; ++k) position_of_node_[static_cast<std::size_t>(cells_.order()[k])] = k;
     row_stride_ = static_cast<std::size_t>(count) + 4;
     sorted_rows_.assign(6 * row_stride_, 0.0);
     for (Index k = 0; k < count; ++k)
@@ -619,8 +622,41 @@ Index MlsShapeFunctions::gather(const Vec3& x, Real radius_factor, Index nearest
         }
       }
     };
-    if (!ascending) {
-      std::sort(positions, positions + n, [&](Index a, Index b) { return order[a] < order[b]; });
+    Index lowest = std::numeric_limits<Index>::max(), highest = 0;
+    if (!ascending)
+      for (std::size_t j = 0; j < n; ++j) {
+        lowest = std::min(lowest, indices[j]);
+        highest = std::max(highest, indices[j]);
+      }
+    if (!ascending && n > 0 && highest - lowest < 64 * static_cast<Index>(n)) {
+      // Ascending by a bit per node over the neighbours' index range, read back word by word: on a
+      // lattice the range is a few node layers (a thin plate's cells hold every layer through the
+      // thickness, so the candidates never come in node order there), and the scan of range / 64 words
+      // costs less than sorting n keys.
+      const auto words = static_cast<std::size_t>((highest - lowest) / 64 + 1);
+      workspace.node_bits.assign(words, 0);
+      std::uint64_t* bits = workspace.node_bits.data();
+      for (std::size_t j = 0; j < n; ++j) {
+        const auto bit = static_cast<std::uint64_t>(indices[j] - lowest);
+        bits[bit / 64] |= std::uint64_t{1} << (bit % 64);
+      }
+      std::size_t j = 0;
+      for (std::size_t w = 0; w < words; ++w)
+        for (std::uint64_t word = bits[w]; word != 0; word &= word - 1)
+          indices[j++] = lowest + static_cast<Index>(64 * w) + __builtin_ctzll(word);
+      for (j = 0; j < n; ++j) positions[j] = position_of_node_[static_cast<std::size_t>(indices[j])];
+      write();
+    } else if (!ascending) {
+      // sorted as (node index, candidate) keys: plain integer comparisons, where a comparator through
+      // order[] loaded two node indices per comparison
+      int shift = 1;
+      while ((std::size_t{1} << shift) < n) ++shift;
+      Index* keys = kept_nodes;  // free: the node indices are in `indices`
+      for (std::size_t j = 0; j < n; ++j) keys[j] = (indices[j] << shift) | static_cast<Index>(j);
+      std::sort(keys, keys + n);
+      const Index mask = (Index{1} << shift) - 1;
+      for (std::size_t j = 0; j < n; ++j) keys[j] = positions[keys[j] & mask];
+      std::copy(keys, keys + n, positions);
       write();
     } else if (!packed) {
       write();

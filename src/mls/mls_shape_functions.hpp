@@ -121,6 +121,7 @@ class MlsShapeFunctions {
   /// time over each row of cells.
   std::vector<Real> sorted_rows_;
   std::vector<Index> sorted_order_;  // node-centred modes: cells_.order() and 4 padding entries
+  std::vector<Index> position_of_node_;  // node-centred modes: the inverse of cells_.order()
   std::size_t row_stride_ = 0;
   Vec3 max_radius_ = Vec3::Zero();
   /// Point-centred modes: 1 / (mean nodal spacing) per axis; distances for "the N nearest" and the
