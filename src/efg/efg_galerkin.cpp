@@ -311,23 +311,7 @@ void EfgAnalysis::assemble_galerkin(OutputSink* sink) {
       }
     }
     if (failure) std::rethrow_exception(failure);
-    if (copies) {
-      Index low = pattern.nonzeros(), high = 0;
-      for (const auto& [lo, hi] : ranges)
-        if (hi > lo) {
-          low = std::min(low, lo);
-          high = std::max(high, hi);
-        }
-#pragma omp parallel for schedule(static)
-      for (Index v = low; v < high; ++v) {
-        Real sum = 0.0;
-        for (int t = 0; t < threads; ++t) {
-          const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
-          if (v >= lo && v < hi) sum += partial[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
-        }
-        values[v] += sum;
-      }
-    }
+    if (copies) add_thread_copies(values, partial, ranges);
     for (int t = 0; t < threads; ++t) f += partial_f[static_cast<std::size_t>(t)];
   }
   timings_["assembly_boundary_s"] = seconds_since(start);

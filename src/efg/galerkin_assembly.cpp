@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <cmath>
 #include <exception>
@@ -497,19 +498,7 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
     }
   }
   failure.rethrow();
-  if (!direct) {
-    // deterministic reduction: thread order
-    const Index total = pattern.nonzeros();
-#pragma omp parallel for schedule(static)
-    for (Index v = 0; v < total; ++v) {
-      Real sum = 0.0;
-      for (int t = 0; t < team_size; ++t) {
-        const auto [lo, hi] = partial_ranges[static_cast<std::size_t>(t)];
-        if (v >= lo && v < hi) sum += partial_values[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
-      }
-      values[v] += sum;
-    }
-  }
+  if (!direct) add_thread_copies(values, partial_values, partial_ranges);  // threads past the team: empty ranges
   if (f.size() != 3 * n_nodes) f = Eigen::VectorXd::Zero(3 * n_nodes);
   for (int t = 0; t < team_size; ++t)
     if (partial_f[static_cast<std::size_t>(t)].size() == f.size()) f += partial_f[static_cast<std::size_t>(t)];
@@ -517,6 +506,26 @@ VolumeAssemblyReport assemble_volume(const VolumeAssembly& in, const solve::Bloc
   report.direct = direct;
   report.grown_face_points = grown_face_points;
   return report;
+}
+
+void add_thread_copies(Real* values, const std::vector<std::vector<Real>>& copies,
+                       const std::vector<std::pair<Index, Index>>& ranges) {
+  const auto threads = static_cast<int>(ranges.size());
+  Index low = std::numeric_limits<Index>::max(), high = 0;
+  for (const auto& [lo, hi] : ranges)
+    if (hi > lo) {
+      low = std::min(low, lo);
+      high = std::max(high, hi);
+    }
+#pragma omp parallel for schedule(static)
+  for (Index v = low; v < high; ++v) {
+    Real sum = 0.0;
+    for (int t = 0; t < threads; ++t) {
+      const auto [lo, hi] = ranges[static_cast<std::size_t>(t)];
+      if (v >= lo && v < hi) sum += copies[static_cast<std::size_t>(t)][static_cast<std::size_t>(v - lo)];
+    }
+    values[v] += sum;
+  }
 }
 
 }  // namespace lamina::efg

@@ -43,6 +43,7 @@
 // smoothed gradient is exact (MLS reproduces u), and the interior face sums cancel between cells,
 // so the quadratic patch test holds to round-off whatever the node layout, the cell shape or the
 // misalignment of supports and cells. Trial and test gradients are the same: K stays symmetric.
+#include <utility>
 #include <vector>
 
 #include "efg/background_quadrature.hpp"
@@ -102,6 +103,11 @@ struct VolumeAssemblyReport {
 /// example the value array of pattern.zero_matrix()) and the body force to f (3N).
 VolumeAssemblyReport assemble_volume(const VolumeAssembly& input, const solve::BlockPattern& pattern, Real* values,
                      Eigen::VectorXd& f);
+
+/// Adds per-thread copies of value ranges into `values`: copy t holds values [ranges[t].first,
+/// ranges[t].second); each value's copies are summed in thread order (deterministic for a thread count).
+void add_thread_copies(Real* values, const std::vector<std::vector<Real>>& copies,
+                       const std::vector<std::pair<Index, Index>>& ranges);
 
 /// Deterministic split of [0, count) into `parts` contiguous chunks: begin of chunk t.
 Index chunk_begin(Index count, int parts, int t);
