@@ -14,7 +14,8 @@ double RemainingTimeEstimate::update(double elapsed, double fraction) {
   while (samples_.size() >= 2 && samples_[1].first <= horizon) samples_.pop_front();
   double estimate = fraction > 1e-6 ? elapsed * (1.0 - fraction) / fraction : 0.0;
   const auto [start, done] = samples_.front();
-  if (start <= horizon && elapsed > start && fraction > done) estimate = (1.0 - fraction) * (elapsed - start) / (fraction - done);
+  if (start <= horizon && elapsed > start && fraction > done)
+    estimate = (1.0 - fraction) * (elapsed - start) / (fraction - done);
   // samples at least 1 % of the elapsed time apart: a few dozen cover the window of any run
   if (elapsed - samples_.back().first >= 0.01 * elapsed) samples_.emplace_back(elapsed, fraction);
   return estimate;
