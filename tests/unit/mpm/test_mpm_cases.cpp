@@ -195,8 +195,9 @@ TEST(mpm_Cases, FlipKeepsTheVelocityTheGridDoesNotSee) {
   // (each grid node halfway between two shell nodes): the grid sees none of it. PIC (flip: 0, the default)
   // replaces the nodes' velocity by the grid's, which is zero: the whole kinetic energy is booked as
   // transfer loss and the balance stays closed. FLIP (flip: 1, seed eq (8)) carries the velocity from step
-  // to step and books no transfer loss; the energy stays in the body, but its balance drifts (0.84 after
-  // 0.05 time units: a velocity the grid does not see never moves the nodes; docs/mpm.md "PIC/FLIP choice")
+  // to step and books no transfer loss; the energy stays in the body. (Its balance drifts, 0.84 after 0.05
+  // time units: a velocity the grid does not see never moves the nodes; docs/mpm.md "PIC/FLIP choice". Not
+  // asserted: that is a limit of FLIP, not a property to keep.)
   const std::string yaml = kStrip.substr(0, kStrip.find("discretization:")) + R"yaml(discretization: {elements: [10, 1], grid: {cell: 1.0}}
 boundary:
   - {select: {set: xmin}, fix: [x, y, z, rx, ry, rz]}
@@ -214,7 +215,6 @@ output: {vtu: false}
   EXPECT_EQ(summary_value("alternating_flip", "energy_transfer"), 0.0);
   EXPECT_GT(summary_value("alternating_flip", "energy_kinetic") + summary_value("alternating_flip", "energy_internal"),
             0.5 * summary_value("alternating_pic", "energy_transfer"));  // kept in the body (0.84 of it)
-  EXPECT_LT(summary_value("alternating_flip", "energy_ratio"), 0.95);
 }
 
 TEST(mpm_Cases, RegularPlateDoesNotRebuildTheGridEveryStep) {
