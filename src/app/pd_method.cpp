@@ -98,6 +98,7 @@ std::unique_ptr<MethodOptions> read_pd(const io::Case& c, const io::NodeReader& 
   o->body.plate_model = section.word("plate_model", {"auto", "lattice"}, "auto") == "auto" ? pd::PlateModel::automatic
                                                                                           : pd::PlateModel::lattice;
   o->body.plate_stabilization = section.real("plate_stabilization", 0.25, 0.0, 100.0, true);
+  o->body.plate_edge_mirror = section.word("plate_edges", {"mirror", "one_sided"}, "mirror") == "mirror";
   const std::string storage = section.word("bond_storage", {"auto", "full", "lean"}, "auto");
   o->body.bond_storage = storage == "full"   ? pd::BodyOptions::BondStorage::full
                          : storage == "lean" ? pd::BodyOptions::BondStorage::lean

@@ -177,8 +177,10 @@ void PeridynamicAnalysis::build_body(const PointMatrix& positions) {
       return;
     }
     if (!problem_.held_rotations.empty()) throw InputError(*problem_.held_rotations.where);
+    std::vector<char> held(static_cast<std::size_t>(3 * problem_.positions.cols()), 0);
+    for (const auto& d : problem_.prescribed) held[static_cast<std::size_t>(3 * d.node + d.component)] = 1;
     adopt(std::make_unique<PeridynamicPlate>(std::move(*columns), positions, problem_.positions, problem_.volumes,
-                                             problem_.young, problem_.poisson, options));
+                                             problem_.young, problem_.poisson, options, held));
   } else {
     if (!problem_.held_rotations.empty()) throw InputError(*problem_.held_rotations.where);
     BodyOptions body_options = options;

@@ -63,6 +63,7 @@ struct BodyOptions {
   Real cell_size = 0.0;         // h of the partial-volume ramp (default: cube root of the node volume)
   PlateModel plate_model = PlateModel::automatic;
   Real plate_stabilization = 0.25;  // plate model: non-affine stabilisation modulus / shear modulus
+  bool plate_edge_mirror = true;    // plate model: families reach across supported edges (plate_edge_mirror.hpp)
   /// pd.bond_storage: full (every bond's length, volume, weights, modulus and reverse index), lean (the
   /// neighbour index only, 4 bytes; LeanPeridynamicSolid recomputes the rest from the positions and
   /// per-node constants: explicit dynamics with a given time step, surface_correction none or energy),

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "material/linear_elastic.hpp"
+#include "pd/plate_edge_mirror.hpp"
 #include "pd/plate_fit.hpp"
 
 namespace lamina::pd {
@@ -16,7 +17,6 @@ namespace lamina::pd {
 namespace {
 
 using Mat32 = Eigen::Matrix<Real, 3, 2>;
-using Mat6 = Eigen::Matrix<Real, 6, 6>;
 
 Mat3 plane_stress_voigt(Real e, Real nu) { return material::LinearElastic{e, nu}.plane_stress_matrix(); }
 
@@ -24,10 +24,12 @@ Mat3 plane_stress_voigt(Real e, Real nu) { return material::LinearElastic{e, nu}
 
 PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& reference, const PointMatrix& lattice,
                                    const Eigen::VectorXd& volumes, const Eigen::VectorXd& young,
-                                   const Eigen::VectorXd& poisson, const BodyOptions& options)
+                                   const Eigen::VectorXd& poisson, const BodyOptions& options,
+                                   const std::vector<char>& held)
     : columns_(std::move(columns)), reference_(reference), nodes_(reference.cols()) {
   const PlateColumns& pc = columns_;
   const Index nc = pc.columns();
+  real_columns_ = nc;
   thickness_ = pc.thickness;
   bending_factor_ = thickness_ * thickness_ / 12.0;
   // Column centres (in-plane, from the lattice), volumes and moduli.
@@ -45,14 +47,32 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
       poisson_[c] += poisson[i] / count;
     }
   }
-  family_ = column_families(centre, volume_, young_, poisson_, options, thickness_);
+  // mirror columns across supported edges (family members only: the image's volume and moduli)
+  mirror_ = held.empty() || !options.plate_edge_mirror
+                ? no_edge_mirror(nc)
+                : mirror_supported_edges(pc, centre, held, options.horizon + 1.5 * pc.spacing);
+  const Index ng = mirror_.count(), ne = nc + ng;
+  PointMatrix family_centre(3, ne);
+  family_centre << centre, mirror_.centre;
+  volume_.conservativeResize(ne);
+  young_.conservativeResize(ne);
+  poisson_.conservativeResize(ne);
+  for (Index g = 0; g < ng; ++g) {
+    const Index image = mirror_.image_of[static_cast<std::size_t>(g)];
+    volume_[nc + g] = volume_[image];
+    young_[nc + g] = young_[image];
+    poisson_[nc + g] = poisson_[image];
+  }
+  weight_ = volume_.head(nc).cwiseProduct(mirror_.energy_factor);
+  family_ = column_families(family_centre, volume_, young_, poisson_, options, thickness_);
   const PeridynamicBody& fam = *family_;
   const Index nb = fam.bonds();
-  xi_.resize(2, nb);
-  shape_b_.resize(2, nb);
-  v_.resize(nb);
-  stabilizer_.resize(nb);
-  bond_shear_.resize(nb);
+  // (bonds of mirror columns: never used, zero)
+  xi_.setZero(2, nb);
+  shape_b_.setZero(2, nb);
+  v_.setZero(nb);
+  stabilizer_.setZero(nb);
+  bond_shear_.setZero(nb);
   shear_modulus_.resize(nc);
   plane_stress_.resize(static_cast<std::size_t>(nc));
   const Real stabilization = options.plate_stabilization;
@@ -62,7 +82,7 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
     Real sum_v = 0;
     for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b) {
       const Index j = fam.neighbour(b);
-      xi_.col(b) = (centre.col(j) - centre.col(i)).head<2>();
+      xi_.col(b) = (family_centre.col(j) - family_centre.col(i)).head<2>();
       const Real length = xi_.col(b).norm();
       const Real omega = options.influence == Influence::one ? 1.0 : options.horizon / length;
       v_[b] = omega * fam.bond_volume()[b];
@@ -99,7 +119,7 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
   metric0_.setZero(3, nc);
   curvature0_.setZero(3, nc);
   shear0_.setZero(2, nc);
-  a0_norm_.setOnes(nc);
+  a0_norm_.setOnes(ne);
   layer_volume_ = volumes;
   gamma0_.setZero(nb);
   z0_.setZero(3, nb);
@@ -109,7 +129,7 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
     BondConstants& k = bond_constants_[static_cast<std::size_t>(b)];
     k.weighted_shape = v_[b] * shape_b_.col(b);
     k.xi = xi_.col(b);
-    k.inverse_length = 1.0 / xi_.col(b).norm();
+    k.inverse_length = xi_.col(b).norm() > 0 ? 1.0 / xi_.col(b).norm() : 0.0;
     k.membrane = membrane_factor_ * stabilizer_[b];
     k.director = bending_factor_ * stabilizer_[b];
     k.shear = bond_shear_[b] * v_[b];
@@ -168,11 +188,11 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
   PlateState& s = static_cast<PlateState&>(state);
   const PlateColumns& pc = columns_;
   const PeridynamicBody& fam = *family_;
-  const Index nc = pc.columns(), nb = fam.bonds();
-  s.m.setZero(3, nc);
-  s.a.setZero(3, nc);
-  s.d.resize(3, nc);
-  s.a_norm.resize(nc);
+  const Index nc = pc.columns(), nb = fam.bonds(), ne = nc + mirror_.count();
+  s.m.setZero(3, ne);
+  s.a.setZero(3, ne);
+  s.d.resize(3, ne);
+  s.a_norm.resize(ne);
   s.residual.setZero(3, pc.layers > 2 ? nodes_ : 0);
   s.energy.resize(nc);
   s.membrane_stress.resize(3, nc);
@@ -205,6 +225,30 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
         s.residual.col(k) = reference_.col(k) + u.col(k) - m - pc.zeta[k] * a;
         if (reference_residual_.cols() == nodes_) s.residual.col(k) -= reference_residual_.col(k);
       }
+  }
+  // mirror columns: fixed combinations of real ones (m and a are linear in the node positions)
+  for (Index g = 0; g < mirror_.count(); ++g) {
+    const auto& motion = mirror_.motion[static_cast<std::size_t>(g)];
+    if (!kinematic_column_.empty() &&
+        !std::all_of(motion.begin(), motion.end(),
+                     [&](const MirrorTerm& t) { return marked(kinematic_column_, t.column); }))
+      continue;
+    Vec3 m = Vec3::Zero(), a = Vec3::Zero();
+    for (const MirrorTerm& t : motion) {
+      m += t.m.cwiseProduct(s.m.col(t.column));
+      a += t.a.cwiseProduct(s.a.col(t.column));
+    }
+    const Index c = nc + g;
+    s.m.col(c) = m;
+    s.a.col(c) = a;
+    s.a_norm[c] = a.norm();
+    s.d.col(c) = a / s.a_norm[c];
+  }
+  if (mirror_.count() > 0) {  // bonds owned by mirror columns carry nothing
+    const Index b0 = fam.first_bond(nc);
+    s.bond_m.rightCols(nb - b0).setZero();
+    s.bond_d.rightCols(nb - b0).setZero();
+    s.bond_dj.rightCols(nb - b0).setZero();
   }
   // Per column: the bond vectors are read once into a per-thread scratch (m_j - m_i, d_j, s_b, eta_b).
   struct BondScratch {
@@ -246,8 +290,13 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
       const Real q = s.a_norm[i] - a0_norm_[i] + alpha * (e[0] + e[1]);
       const Mat3& cps = plane_stress_[static_cast<std::size_t>(i)];
       const Vec3 ce = cps * e, ck = bending_factor_ * (cps * k);
-      const Vec3 sigma = ce + Vec3(et * q * alpha, et * q * alpha, 0);
+      Vec3 sigma = ce + Vec3(et * q * alpha, et * q * alpha, 0);
       Real w = 0.5 * e.dot(ce) + 0.5 * et * q * q + 0.5 * k.dot(ck);
+      for (int t = 0; t < 2; ++t)  // the strip outside a clamp whose tangential motion is free (a bar)
+        if (const Real strip = mirror_.strip(t, i); strip > 0) {
+          sigma[t] += strip * et * e[t];
+          w += 0.5 * strip * et * e[t] * e[t];
+        }
       Eigen::Matrix2d S, M;
       S << sigma[0], sigma[2], sigma[2], sigma[1];
       M << ck[0], ck[2], ck[2], ck[1];
@@ -272,7 +321,7 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
         const Real sigma_b = bc[t].weighted_shape.dot(tau_lambda) + bc[t].shear * bs[t].eta * bc[t].inverse_length;
         Vec3 force_m = (0.5 * sigma_b) * (di + dj);
         self_d += (0.5 * sigma_b) * dm;
-        s.bond_dj.col(b) = (volume_[i] * 0.5 * sigma_b) * dm;
+        s.bond_dj.col(b) = (weight_[i] * 0.5 * sigma_b) * dm;
         // in-plane non-affine stabilisation (tangent projection P = I - d d^T)
         const Vec3 z_raw = dm - f * bc[t].xi;
         const Real dz = di.dot(z_raw);
@@ -294,12 +343,12 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
       }
       for (Index t = 0; t < nf; ++t) {
         const Index b = b0 + t;
-        s.bond_m.col(b) = volume_[i] * (s.bond_m.col(b) + pf * bc[t].weighted_shape);
-        s.bond_d.col(b) = volume_[i] * (s.bond_d.col(b) + pd * bc[t].weighted_shape);
+        s.bond_m.col(b) = weight_[i] * (s.bond_m.col(b) + pf * bc[t].weighted_shape);
+        s.bond_d.col(b) = weight_[i] * (s.bond_d.col(b) + pd * bc[t].weighted_shape);
       }
-      s.self_d.col(i) = volume_[i] * self_d;
-      s.self_a.col(i) = volume_[i] * et * q * di;
-      s.energy[i] = volume_[i] * w;
+      s.self_d.col(i) = weight_[i] * self_d;
+      s.self_a.col(i) = weight_[i] * et * q * di;
+      s.energy[i] = weight_[i] * w;
       s.membrane_stress.col(i) = sigma;
       s.membrane_trace[i] = e[0] + e[1];
       s.membrane_strain.col(i) = e;
@@ -309,46 +358,83 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
   }
 }
 
+std::vector<std::vector<Index>> PeridynamicPlate::expanded_families() const {
+  const PeridynamicBody& fam = *family_;
+  const Index nc = real_columns_;
+  std::vector<std::vector<Index>> out(static_cast<std::size_t>(nc));
+#pragma omp parallel for schedule(dynamic, 64)
+  for (Index i = 0; i < nc; ++i) {
+    auto& list = out[static_cast<std::size_t>(i)];
+    list.push_back(i);
+    for (Index b = fam.first_bond(i); b < fam.end_bond(i); ++b)
+      for_each_term(fam.neighbour(b), [&](const MirrorTerm& t) { list.push_back(t.column); });
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  return out;
+}
+
 void PeridynamicPlate::restrict_to_nodes(const std::vector<char>& nodes) {
   force_column_.clear();
   bond_column_.clear();
   kinematic_column_.clear();
   if (nodes.empty()) return;
   const PlateColumns& pc = columns_;
-  const PeridynamicBody& fam = *family_;
   const Index nc = pc.columns();
-  auto grow = [&](const std::vector<char>& from) {  // from and the families of its columns
-    std::vector<char> to = from;
-    for (Index c = 0; c < nc; ++c)
-      if (from[static_cast<std::size_t>(c)])
-        for (Index b = fam.first_bond(c); b < fam.end_bond(c); ++b) to[static_cast<std::size_t>(fam.neighbour(b))] = 1;
-    return to;
-  };
   force_column_.assign(static_cast<std::size_t>(nc), 0);
   for (Index c = 0; c < nc; ++c)
     for (Index p = pc.first[c]; p < pc.first[c + 1]; ++p)
       if (nodes[static_cast<std::size_t>(pc.node[p])]) force_column_[static_cast<std::size_t>(c)] = 1;
-  bond_column_ = grow(force_column_);
-  kinematic_column_ = grow(bond_column_);
+  // the columns whose energy reaches a force column, and the columns their energy depends on
+  const auto families = expanded_families();
+  bond_column_.assign(static_cast<std::size_t>(nc), 0);
+  kinematic_column_.assign(static_cast<std::size_t>(nc), 0);
+  for (Index i = 0; i < nc; ++i) {
+    const auto& list = families[static_cast<std::size_t>(i)];
+    if (std::none_of(list.begin(), list.end(),
+                     [&](Index c) { return force_column_[static_cast<std::size_t>(c)] != 0; }))
+      continue;
+    bond_column_[static_cast<std::size_t>(i)] = 1;
+    for (Index c : list) kinematic_column_[static_cast<std::size_t>(c)] = 1;
+  }
 }
 
 PointMatrix PeridynamicPlate::internal_force(const ModelState& state) const {
   const PlateState& s = static_cast<const PlateState&>(state);
   const PlateColumns& pc = columns_;
   const PeridynamicBody& fam = *family_;
-  const Index nc = pc.columns();
-  PointMatrix force(3, nodes_);
+  const Index nc = pc.columns(), ng = mirror_.count();
+  // d Pi / d m and d Pi / d a of every column (mirror columns: then added to the columns they move with)
+  PointMatrix gradient_m(3, nc + ng), gradient_a(3, nc + ng);
+  std::vector<char> mirror_needed(static_cast<std::size_t>(ng), 0);
+  for (Index g = 0; g < ng; ++g)
+    for (const MirrorTerm& t : mirror_.motion[static_cast<std::size_t>(g)])
+      if (marked(force_column_, t.column)) mirror_needed[static_cast<std::size_t>(g)] = 1;
 #pragma omp parallel for schedule(static)
-  for (Index c = 0; c < nc; ++c) {
-    if (!marked(force_column_, c)) continue;
-    Vec3 gm = Vec3::Zero(), gd = s.self_d.col(c);
+  for (Index c = 0; c < nc + ng; ++c) {
+    if (c < nc ? !marked(force_column_, c) : !mirror_needed[static_cast<std::size_t>(c - nc)]) continue;
+    Vec3 gm = Vec3::Zero(), gd = c < nc ? Vec3(s.self_d.col(c)) : Vec3::Zero();
     for (Index b = fam.first_bond(c); b < fam.end_bond(c); ++b) {
       const Index r = fam.reverse(b);
       gm += s.bond_m.col(r) - s.bond_m.col(b);
       gd += s.bond_d.col(r) + s.bond_dj.col(r) - s.bond_d.col(b);
     }
     const Vec3 d = s.d.col(c);
-    const Vec3 ga = (gd - d * d.dot(gd)) / s.a_norm[c] + s.self_a.col(c);
+    gradient_m.col(c) = gm;
+    gradient_a.col(c) = (gd - d * d.dot(gd)) / s.a_norm[c];
+    if (c < nc) gradient_a.col(c) += s.self_a.col(c);
+  }
+  for (Index g = 0; g < ng; ++g)  // in order: deterministic
+    if (mirror_needed[static_cast<std::size_t>(g)])
+      for (const MirrorTerm& t : mirror_.motion[static_cast<std::size_t>(g)]) {
+        gradient_m.col(t.column) += t.m.cwiseProduct(gradient_m.col(nc + g));
+        gradient_a.col(t.column) += t.a.cwiseProduct(gradient_a.col(nc + g));
+      }
+  PointMatrix force(3, nodes_);
+#pragma omp parallel for schedule(static)
+  for (Index c = 0; c < nc; ++c) {
+    if (!marked(force_column_, c)) continue;
+    const Vec3 gm = gradient_m.col(c), ga = gradient_a.col(c);
     for (Index p = pc.first[c]; p < pc.first[c + 1]; ++p) {
       const Index k = pc.node[p];
       force.col(k) = -(pc.phi[k] * gm + pc.psi[k] * ga);
@@ -356,211 +442,6 @@ PointMatrix PeridynamicPlate::internal_force(const ModelState& state) const {
     }
   }
   return force;
-}
-
-solve::SparseMatrix PeridynamicPlate::stiffness(const ModelState& state, bool material, bool geometric) const {
-  const PlateState& s = static_cast<const PlateState&>(state);
-  const PlateColumns& pc = columns_;
-  const PeridynamicBody& fam = *family_;
-  const Index nc = pc.columns();
-  // Block pattern: the columns within two families of each column; blocks (K, J) are 6 x 6 over
-  // (m, a) of K (rows) and J (columns), stored for every J over its sorted pattern.
-  std::vector<std::vector<Index>> pattern(static_cast<std::size_t>(nc));
-  {
-    const int threads = omp_get_max_threads();
-    std::vector<std::vector<Index>> markers(static_cast<std::size_t>(threads), std::vector<Index>(static_cast<std::size_t>(nc), -1));
-#pragma omp parallel for schedule(dynamic, 32)
-    for (Index j = 0; j < nc; ++j) {
-      auto& marker = markers[static_cast<std::size_t>(omp_get_thread_num())];
-      auto& list = pattern[static_cast<std::size_t>(j)];
-      auto add = [&](Index k) {
-        if (marker[static_cast<std::size_t>(k)] != j) marker[static_cast<std::size_t>(k)] = j, list.push_back(k);
-      };
-      add(j);
-      for (Index b = fam.first_bond(j); b < fam.end_bond(j); ++b) {
-        const Index i = fam.neighbour(b);
-        add(i);
-        for (Index bb = fam.first_bond(i); bb < fam.end_bond(i); ++bb) add(fam.neighbour(bb));
-      }
-      std::sort(list.begin(), list.end());
-    }
-  }
-  // Colours: columns whose closed families are disjoint (not within each other's pattern) share one,
-  // so the local matrices of one colour are added without races, in a fixed order.
-  std::vector<int> colour(static_cast<std::size_t>(nc), -1);
-  int colours = 0;
-  {
-    std::vector<char> used;
-    for (Index j = 0; j < nc; ++j) {
-      used.assign(static_cast<std::size_t>(colours) + 1, 0);
-      for (Index k : pattern[static_cast<std::size_t>(j)])
-        if (colour[static_cast<std::size_t>(k)] >= 0) used[static_cast<std::size_t>(colour[static_cast<std::size_t>(k)])] = 1;
-      int c = 0;
-      while (used[static_cast<std::size_t>(c)]) ++c;
-      colour[static_cast<std::size_t>(j)] = c;
-      colours = std::max(colours, c + 1);
-    }
-  }
-  std::vector<std::vector<Index>> by_colour(static_cast<std::size_t>(colours));
-  for (Index j = 0; j < nc; ++j) by_colour[static_cast<std::size_t>(colour[static_cast<std::size_t>(j)])].push_back(j);
-  std::vector<std::vector<Mat6>> blocks(static_cast<std::size_t>(nc));
-  for (Index j = 0; j < nc; ++j) blocks[static_cast<std::size_t>(j)].assign(pattern[static_cast<std::size_t>(j)].size(), Mat6::Zero());
-  auto block = [&](Index row, Index col) -> Mat6& {
-    const auto& list = pattern[static_cast<std::size_t>(col)];
-    const auto it = std::lower_bound(list.begin(), list.end(), row);
-    return blocks[static_cast<std::size_t>(col)][static_cast<std::size_t>(it - list.begin())];
-  };
-  for (const auto& members : by_colour) {
-#pragma omp parallel for schedule(dynamic, 8)
-    for (std::size_t idx = 0; idx < members.size(); ++idx) {
-      const Index i = members[idx];
-      const Index b0 = fam.first_bond(i), nf = fam.end_bond(i) - b0, slots = nf + 1;
-      auto slot_column = [&](Index s) { return s == 0 ? i : fam.neighbour(b0 + s - 1); };
-      Eigen::MatrixXd h = Eigen::MatrixXd::Zero(6 * slots, 6 * slots);
-      // dF / dm_s = bvec_s (F_:a = sum_s bvec_s[a] m_s)
-      Eigen::Matrix2Xd bvec(2, slots);
-      bvec.col(0).setZero();
-      for (Index t = 1; t < slots; ++t) {
-        bvec.col(t) = v_[b0 + t - 1] * shape_b_.col(b0 + t - 1);
-        bvec.col(0) -= bvec.col(t);
-      }
-      const Real vi = volume_[i];
-      if (material) {
-        const Eigen::Map<const Mat32> f0(f0_.col(i).data()), dd0(dd0_.col(i).data());
-        std::vector<Mat3> r(static_cast<std::size_t>(slots));
-        for (Index t = 0; t < slots; ++t) {
-          const Index c = slot_column(t);
-          r[static_cast<std::size_t>(t)] = (Mat3::Identity() - d0_.col(c) * d0_.col(c).transpose()) / a0_norm_[c];
-        }
-        // membrane strain, curvature and thickness rows (7 x 6 slots)
-        Eigen::MatrixXd g = Eigen::MatrixXd::Zero(7, 6 * slots);
-        for (Index t = 0; t < slots; ++t) {
-          const Real b0t = bvec(0, t), b1t = bvec(1, t);
-          const Mat3& rt = r[static_cast<std::size_t>(t)];
-          g.block<1, 3>(0, 6 * t) = b0t * f0.col(0).transpose();
-          g.block<1, 3>(1, 6 * t) = b1t * f0.col(1).transpose();
-          g.block<1, 3>(2, 6 * t) = b1t * f0.col(0).transpose() + b0t * f0.col(1).transpose();
-          g.block<1, 3>(3, 6 * t) = b0t * dd0.col(0).transpose();
-          g.block<1, 3>(4, 6 * t) = b1t * dd0.col(1).transpose();
-          g.block<1, 3>(5, 6 * t) = b0t * dd0.col(1).transpose() + b1t * dd0.col(0).transpose();
-          g.block<1, 3>(3, 6 * t + 3) = b0t * f0.col(0).transpose() * rt;
-          g.block<1, 3>(4, 6 * t + 3) = b1t * f0.col(1).transpose() * rt;
-          g.block<1, 3>(5, 6 * t + 3) = (b1t * f0.col(0).transpose() + b0t * f0.col(1).transpose()) * rt;
-        }
-        const Real nu = poisson_[i], alpha = nu / (1 - nu), et = young_[i];
-        g.row(6) = alpha * (g.row(0) + g.row(1));
-        g.block<1, 3>(6, 3) += d0_.col(i).transpose();
-        Eigen::Matrix<Real, 7, 7> wmat = Eigen::Matrix<Real, 7, 7>::Zero();
-        const Mat3& cps = plane_stress_[static_cast<std::size_t>(i)];
-        wmat.topLeftCorner<3, 3>() = cps;
-        wmat.block<3, 3>(3, 3) = bending_factor_ * cps;
-        wmat(6, 6) = et;
-        h.noalias() += vi * g.transpose() * (wmat * g);
-        // transverse shear: s_b linear in (m_0, a_0, m_t, a_t); gamma = Bm^T s, eta = diag(1/|xi|) (I - X Bm^T) s;
-        // energy 1/2 s^T A s with A = kappa mu Bm Bm^T + N^T diag(g v / |xi|^2) N
-        const Vec3 di0 = d0_.col(i);
-        std::vector<Eigen::Matrix<Real, 12, 1>> gs(static_cast<std::size_t>(nf));
-        Eigen::MatrixXd bm(nf, 2), xm(nf, 2);
-        Eigen::VectorXd bond_weight(nf);
-        for (Index t = 1; t < slots; ++t) {
-          const Index b = b0 + t - 1, j = slot_column(t);
-          const Vec3 dm0 = m0_.col(j) - m0_.col(i), dbar = 0.5 * (di0 + d0_.col(j));
-          auto& gb = gs[static_cast<std::size_t>(t - 1)];
-          gb.segment<3>(0) = -dbar;
-          gb.segment<3>(3) = r[0].transpose() * dm0 / 2;
-          gb.segment<3>(6) = dbar;
-          gb.segment<3>(9) = r[static_cast<std::size_t>(t)].transpose() * dm0 / 2;
-          bm.row(t - 1) = v_[b] * shape_b_.col(b).transpose();
-          xm.row(t - 1) = xi_.col(b).transpose();
-          bond_weight[t - 1] = bond_shear_[b] * v_[b] / xi_.col(b).squaredNorm();
-        }
-        const Eigen::MatrixXd nmat = Eigen::MatrixXd::Identity(nf, nf) - xm * bm.transpose();
-        const Eigen::MatrixXd amat = vi * (shear_modulus_[i] * bm * bm.transpose() + nmat.transpose() * bond_weight.asDiagonal() * nmat);
-        for (Index bb = 0; bb < nf; ++bb)
-          for (Index cc = 0; cc < nf; ++cc) {
-            const Real w = amat(bb, cc);
-            const Eigen::Matrix<Real, 12, 12> hs = w * gs[static_cast<std::size_t>(bb)] * gs[static_cast<std::size_t>(cc)].transpose();
-            const Index tb = bb + 1, tc = cc + 1;
-            h.block<6, 6>(0, 0) += hs.block<6, 6>(0, 0);
-            h.block<6, 6>(0, 6 * tc) += hs.block<6, 6>(0, 6);
-            h.block<6, 6>(6 * tb, 0) += hs.block<6, 6>(6, 0);
-            h.block<6, 6>(6 * tb, 6 * tc) += hs.block<6, 6>(6, 6);
-          }
-        // stabilisation: z_b = sum_t alpha_bt m_t (projected), y_b = sum_t alpha_bt d_t
-        Eigen::MatrixXd coefficient = Eigen::MatrixXd::Zero(nf, slots);
-        for (Index bb = 0; bb < nf; ++bb) {
-          const Eigen::Vector2d x = xi_.col(b0 + bb);
-          for (Index t = 0; t < slots; ++t) coefficient(bb, t) = -bvec.col(t).dot(x);
-          coefficient(bb, bb + 1) += 1.0;
-          coefficient(bb, 0) -= 1.0;
-        }
-        const Eigen::MatrixXd stab = coefficient.transpose() * stabilizer_.segment(b0, nf).asDiagonal() * coefficient;
-        const Mat3 p0 = Mat3::Identity() - di0 * di0.transpose();
-        for (Index t = 0; t < slots; ++t)
-          for (Index u = 0; u < slots; ++u) {
-            const Real w = vi * stab(t, u);
-            if (w == 0) continue;
-            h.block<3, 3>(6 * t, 6 * u) += (w * membrane_factor_) * p0;
-            h.block<3, 3>(6 * t + 3, 6 * u + 3) +=
-                (w * bending_factor_) * (r[static_cast<std::size_t>(t)].transpose() * r[static_cast<std::size_t>(u)]);
-          }
-      }
-      if (geometric) {
-        const Vec3 sg = s.membrane_stress.col(i);
-        Eigen::Matrix2d S;
-        S << sg[0], sg[2], sg[2], sg[1];
-        for (Index t = 0; t < slots; ++t)
-          for (Index u = 0; u < slots; ++u)
-            h.block<3, 3>(6 * t, 6 * u).diagonal().array() += vi * bvec.col(t).dot(S * bvec.col(u));
-      }
-      for (Index t = 0; t < slots; ++t)
-        for (Index u = 0; u < slots; ++u) block(slot_column(t), slot_column(u)) += h.block<6, 6>(6 * t, 6 * u);
-    }
-  }
-  // Node matrix: K_node = T^T K_col T, T_k = [phi_k I; psi_k I]; upper triangle.
-  std::vector<std::vector<Eigen::Triplet<Real, int>>> parts(static_cast<std::size_t>(nc));
-#pragma omp parallel for schedule(dynamic, 32)
-  for (Index j = 0; j < nc; ++j) {
-    auto& out = parts[static_cast<std::size_t>(j)];
-    const auto& list = pattern[static_cast<std::size_t>(j)];
-    for (std::size_t kk = 0; kk < list.size(); ++kk) {
-      const Index kc = list[kk];
-      const Mat6& bl = blocks[static_cast<std::size_t>(j)][kk];
-      for (Index pl = pc.first[j]; pl < pc.first[j + 1]; ++pl) {
-        const Index l = pc.node[pl];
-        for (Index pk = pc.first[kc]; pk < pc.first[kc + 1]; ++pk) {
-          const Index k = pc.node[pk];
-          if (k > l) continue;
-          const Mat3 nb3 = pc.phi[k] * pc.phi[l] * bl.topLeftCorner<3, 3>() + pc.phi[k] * pc.psi[l] * bl.topRightCorner<3, 3>() +
-                           pc.psi[k] * pc.phi[l] * bl.bottomLeftCorner<3, 3>() + pc.psi[k] * pc.psi[l] * bl.bottomRightCorner<3, 3>();
-          for (int a = 0; a < 3; ++a)
-            for (int c = 0; c < 3; ++c)
-              if (k < l || a <= c) out.emplace_back(static_cast<int>(3 * k + a), static_cast<int>(3 * l + c), nb3(a, c));
-        }
-      }
-    }
-    if (material && pc.layers > 2) {
-      // layer residual: k_r (I - P)^T V (I - P), P_pl = phi_l + zeta_p psi_l
-      const Index first = pc.first[j], count = pc.first[j + 1] - first;
-      Eigen::MatrixXd ip = Eigen::MatrixXd::Identity(count, count);
-      Eigen::VectorXd vol(count);
-      for (Index p = 0; p < count; ++p) {
-        vol[p] = layer_volume_[pc.node[first + p]];
-        for (Index q = 0; q < count; ++q) {
-          const Index l = pc.node[first + q];
-          ip(p, q) -= pc.phi[l] + pc.zeta[pc.node[first + p]] * pc.psi[l];
-        }
-      }
-      const Eigen::MatrixXd hr = residual_modulus_ * ip.transpose() * vol.asDiagonal() * ip;
-      for (Index p = 0; p < count; ++p)
-        for (Index q = 0; q < count; ++q) {
-          const Index k = pc.node[first + p], l = pc.node[first + q];
-          if (k > l) continue;
-          for (int a = 0; a < 3; ++a) out.emplace_back(static_cast<int>(3 * k + a), static_cast<int>(3 * l + a), hr(p, q));
-        }
-    }
-  }
-  return matrix_from_parts(parts, 3 * nodes_);
 }
 
 Real PeridynamicPlate::strain_energy(const ModelState& state) const {

@@ -20,9 +20,12 @@
 // Every measure is invariant under rigid rotation (geometrically exact kinematics); a homogeneous
 // membrane strain, curvature or transverse shear gives the classical plate energy at every column
 // (the non-affine parts vanish; shear exact for mirror-symmetric families).
+// Supported edges (clamps, simple supports, symmetry planes): the families reach into mirror columns
+// that move with real ones, and a column on a mirror line weighs half (plate_edge_mirror.hpp).
 #include <memory>
 #include <vector>
 
+#include "pd/plate_edge_mirror.hpp"
 #include "pd/peridynamic_body.hpp"
 #include "pd/peridynamic_model.hpp"
 #include "pd/plate_columns.hpp"
@@ -52,10 +55,12 @@ struct PlateStatistics {
 class PeridynamicPlate : public PeridynamicModel {
  public:
   /// reference: the stress-free node positions (with any imperfection); lattice: the same nodes without
-  /// it (columns and families are built on it); per-node volume, E and nu.
+  /// it (columns and families are built on it); per-node volume, E and nu; held: per node dof, whether
+  /// it is fixed or prescribed (the families reach across clamped edges into mirror columns,
+  /// plate_edge_mirror.hpp; empty: no mirrors).
   PeridynamicPlate(PlateColumns columns, const PointMatrix& reference, const PointMatrix& lattice,
                    const Eigen::VectorXd& volumes, const Eigen::VectorXd& young, const Eigen::VectorXd& poisson,
-                   const BodyOptions& options);
+                   const BodyOptions& options, const std::vector<char>& held = {});
 
   std::string name() const override { return "plate"; }
   std::unique_ptr<ModelState> make_state() const override { return std::make_unique<PlateState>(); }
@@ -75,12 +80,26 @@ class PeridynamicPlate : public PeridynamicModel {
   const PlateColumns& columns() const { return columns_; }
   const PeridynamicBody& family() const { return *family_; }
   const PlateStatistics& statistics() const { return statistics_; }
+  const PlateEdgeMirror& mirror() const { return mirror_; }
 
  private:
+  /// Per real column i: the real columns its energy depends on - i, its family, and the columns that
+  /// move its family's mirror columns - sorted.
+  std::vector<std::vector<Index>> expanded_families() const;
+  /// Calls f(term) for each term of column c's motion (a real column: itself, factors 1).
+  template <class F>
+  void for_each_term(Index c, const F& f) const {
+    if (c < real_columns_) f(MirrorTerm{c, Vec3::Ones(), Vec3::Ones()});
+    else
+      for (const MirrorTerm& t : mirror_.motion[static_cast<std::size_t>(c - real_columns_)]) f(t);
+  }
   /// B_b of the bonds [b0, b1) of one column; returns the polynomial degree used.
   int gradient_weights(Index b0, Index b1, Real horizon);
 
   PlateColumns columns_;
+  // mirror columns across supported edges: family members nc .. nc + G - 1, moving with real columns
+  PlateEdgeMirror mirror_;
+  Index real_columns_ = 0;
   // restrict_to_nodes: the columns whose force, bond terms and kinematics are computed (empty: all)
   std::vector<char> force_column_, bond_column_, kinematic_column_;
   static bool marked(const std::vector<char>& set, Index c) { return set.empty() || set[static_cast<std::size_t>(c)]; }
@@ -93,7 +112,9 @@ class PeridynamicPlate : public PeridynamicModel {
   // the boundary-layer ringing of a loaded edge; no effect on bending), the director one at s mu
   Real membrane_factor_ = 4;                // layer residual stiffness per volume (3-4 layers)
   // per column
-  Eigen::VectorXd volume_, shear_modulus_, young_, poisson_, a0_norm_;
+  // per column (volume_, young_, poisson_, a0_norm_, m0_, d0_: mirror columns too); weight_: the
+  // energy weight V_i x the mirror's energy factor
+  Eigen::VectorXd volume_, weight_, shear_modulus_, young_, poisson_, a0_norm_;
   std::vector<Mat3> plane_stress_;           // C (Voigt, engineering shear)
   Eigen::Matrix3Xd metric0_, curvature0_;    // A0 (11, 22, 12), kappa0 (11, 22, 2 x 12)
   // per bond

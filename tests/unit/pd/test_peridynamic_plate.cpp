@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 
 #include "geometry/cell_lattice.hpp"
 #include "core/error.hpp"
@@ -25,7 +26,9 @@ constexpr Real young = 69000, poisson = 0.33;
 struct PlateFixture {
   PointCloud cloud;
   std::unique_ptr<PeridynamicPlate> plate;
-  PlateFixture(Real side, Real dx, Real thickness, int layers, Real horizon_factor, Real stabilization = 0.25) {
+  /// held(x, component): whether that dof of the node at x is held (the clamped edges' mirrors).
+  PlateFixture(Real side, Real dx, Real thickness, int layers, Real horizon_factor, Real stabilization = 0.25,
+               const std::function<bool(const Vec3&, int)>& held = {}) {
     cloud = lattice_point_cloud(make_cell_lattice(Vec3(0, 0, -thickness / 2), Vec3(side, side, thickness / 2),
                                                   Vec3(dx, dx, thickness / layers)), true);
     BodyOptions options;
@@ -34,9 +37,15 @@ struct PlateFixture {
     auto columns = find_plate_columns(cloud.positions, cloud.volumes);
     EXPECT_TRUE(columns.has_value());
     const Index n = cloud.size();
+    std::vector<char> held_dofs;
+    if (held) {
+      held_dofs.assign(static_cast<std::size_t>(3 * n), 0);
+      for (Index k = 0; k < n; ++k)
+        for (int a = 0; a < 3; ++a) held_dofs[static_cast<std::size_t>(3 * k + a)] = held(cloud.positions.col(k), a);
+    }
     plate = std::make_unique<PeridynamicPlate>(*columns, cloud.positions, cloud.positions, cloud.volumes,
                                                Eigen::VectorXd::Constant(n, young), Eigen::VectorXd::Constant(n, poisson),
-                                               options);
+                                               options, held_dofs);
   }
   Real energy(const PointMatrix& u) const { return plate->strain_energy(*plate->state_of(u)); }
   /// Displacement of a Kirchhoff plate field: mid-surface (u0, v0, w) and the normal rotation, at each node.
@@ -54,6 +63,37 @@ struct PlateFixture {
 };
 
 Real bending_rigidity(Real t) { return young * t * t * t / (12 * (1 - poisson * poisson)); }
+
+/// Largest |F + dPi/du| over every `stride`-th dof at u (central differences), over the largest |F|.
+Real gradient_error(const PlateFixture& f, const PointMatrix& u, Index stride) {
+  const PointMatrix force = f.plate->internal_force(*f.plate->state_of(u));
+  const Real h = 1e-7;
+  Real worst = 0;
+  for (Index dof = 0; dof < u.size(); dof += stride) {
+    PointMatrix up = u, um = u;
+    up.data()[dof] += h, um.data()[dof] -= h;
+    const Real numeric = -(f.energy(up) - f.energy(um)) / (2 * h);
+    worst = std::max(worst, std::abs(numeric - force.data()[dof]));
+  }
+  return worst / force.cwiseAbs().maxCoeff();
+}
+
+/// Largest |K0 column + dF/du| over every `stride`-th dof at the reference, over the largest |K0| entry.
+Real stiffness_error(const PlateFixture& f, Index stride) {
+  const Index n = f.cloud.size();
+  const solve::SparseMatrix k0 = f.plate->stiffness(*f.plate->state_of(PointMatrix::Zero(3, n)), true, false);
+  const Eigen::MatrixXd k = Eigen::MatrixXd(Eigen::MatrixXd(k0).selfadjointView<Eigen::Upper>());
+  Real worst = 0;
+  for (Index dof = 0; dof < 3 * n; dof += stride) {
+    PointMatrix up = PointMatrix::Zero(3, n), um = up;
+    const Real e = 1e-6;
+    up.data()[dof] += e, um.data()[dof] -= e;
+    const PointMatrix df = (f.plate->internal_force(*f.plate->state_of(up)) - f.plate->internal_force(*f.plate->state_of(um))) / (2 * e);
+    const Eigen::Map<const Eigen::VectorXd> column(df.data(), 3 * n);
+    worst = std::max(worst, (column + k.col(dof)).cwiseAbs().maxCoeff());
+  }
+  return worst / k.cwiseAbs().maxCoeff();
+}
 
 /// Per node dof, 1 = free: the 40 mm square plate supported with w = 0 on its outer columns, one in-plane
 /// pin (17.5, 17.5) and one roller (37.5, 17.5) on the bottom layer (the rigid motions).
@@ -131,30 +171,9 @@ TEST(PeridynamicPlate, TransverseShearModulus) {
 TEST(PeridynamicPlate, ForceIsEnergyGradientAndStiffnessIsForceDerivative) {
   for (int layers : {2, 3}) {
     PlateFixture f(30, 5, 2, layers, 2.5);
-    const Index n = f.cloud.size();
-    PointMatrix u = PointMatrix::Random(3, n) * 1e-3;
-    const PointMatrix force = f.plate->internal_force(*f.plate->state_of(u));
-    const Real h = 1e-7;
-    Real worst = 0, scale = force.cwiseAbs().maxCoeff();
-    for (Index dof = 0; dof < 3 * n; dof += 7) {
-      PointMatrix up = u, um = u;
-      up.data()[dof] += h, um.data()[dof] -= h;
-      const Real numeric = -(f.energy(up) - f.energy(um)) / (2 * h);
-      worst = std::max(worst, std::abs(numeric - force.data()[dof]));
-    }
-    EXPECT_LT(worst, 1e-5 * scale) << layers;
-    const solve::SparseMatrix k0 = f.plate->stiffness(*f.plate->state_of(PointMatrix::Zero(3, n)), true, false);
-    const Eigen::MatrixXd k = Eigen::MatrixXd(Eigen::MatrixXd(k0).selfadjointView<Eigen::Upper>());
-    Real kworst = 0;
-    for (Index dof = 0; dof < 3 * n; dof += 5) {
-      PointMatrix up = PointMatrix::Zero(3, n), um = up;
-      const Real e = 1e-6;
-      up.data()[dof] += e, um.data()[dof] -= e;
-      const PointMatrix df = (f.plate->internal_force(*f.plate->state_of(up)) - f.plate->internal_force(*f.plate->state_of(um))) / (2 * e);
-      const Eigen::Map<const Eigen::VectorXd> column(df.data(), 3 * n);
-      kworst = std::max(kworst, (column + k.col(dof)).cwiseAbs().maxCoeff());
-    }
-    EXPECT_LT(kworst, 1e-5 * k.cwiseAbs().maxCoeff()) << layers;
+    const PointMatrix u = PointMatrix::Random(3, f.cloud.size()) * 1e-3;
+    EXPECT_LT(gradient_error(f, u, 7), 1e-5) << layers;
+    EXPECT_LT(stiffness_error(f, 5), 1e-5) << layers;
   }
 }
 
@@ -334,5 +353,83 @@ TEST(PeridynamicPlate, RestrictedForcesEqualTheWholeForcesOnTheBlock) {
       f.plate->restrict_to_nodes({});
       EXPECT_EQ(f.plate->internal_force(*f.plate->state_of(u)), whole) << layers;
     }
+  }
+}
+
+namespace {
+
+/// Every kind of mirrored edge (plate_edge_mirror.hpp) on the 30 mm square of 5 mm cells (column lines
+/// 2.5 and 27.5), and corners between them: x = 2.5 clamped (x, y, z held), y = 2.5 clamped with its
+/// tangential x motion free (y, z held), x = 27.5 simply supported (z held), y = 27.5 a symmetry plane
+/// (y held).
+bool four_kinds_of_edge(const Vec3& x, int component) {
+  if (x.x() < 3) return true;
+  if (x.y() < 3 && component > 0) return true;
+  if (x.x() > 27 && component == 2) return true;
+  return x.y() > 27 && component == 1;
+}
+
+}  // namespace
+
+// Supported edges (plate_edge_mirror.hpp): the families reach into mirror columns, which move with real
+// ones; the forces stay the exact energy gradient and the stiffness the force derivative, for every dof
+// (held ones too: the mirror is a fixed linear map of the node positions).
+TEST(PeridynamicPlate, MirroredEdgesKeepForceAndStiffnessConsistent) {
+  for (int layers : {2, 3}) {
+    PlateFixture f(30, 5, 2, layers, 2.5, 0.25, four_kinds_of_edge);
+    ASSERT_EQ(f.plate->mirror().edges.size(), 4u);
+    ASSERT_GT(f.plate->mirror().count(), 0);
+    const Index n = f.cloud.size();
+    const PointMatrix u = PointMatrix::Random(3, n) * 1e-3;
+    EXPECT_LT(gradient_error(f, u, 5), 1e-5) << layers;
+    EXPECT_LT(stiffness_error(f, 4), 1e-5) << layers;
+    const PointMatrix force = f.plate->internal_force(*f.plate->state_of(u));
+    // restricted to a block of nodes next to the corner, the forces there are the whole ones, bit for bit
+    std::vector<char> mine(static_cast<std::size_t>(n), 0);
+    for (Index node = 0; node < n; ++node) mine[static_cast<std::size_t>(node)] = f.cloud.positions(1, node) < 12;
+    auto state = f.plate->state_of(PointMatrix::Random(3, n) * 1e-3);
+    f.plate->restrict_to_nodes(mine);
+    f.plate->update(u, *state, false);
+    const PointMatrix part = f.plate->internal_force(*state);
+    f.plate->restrict_to_nodes({});
+    for (Index node = 0; node < n; ++node)
+      if (mine[static_cast<std::size_t>(node)]) EXPECT_EQ(part.col(node), force.col(node)) << layers << " " << node;
+  }
+}
+
+// A clamp continues the field evenly: the bending field w = k (x - x0)^2 / 2 (zero deflection and slope
+// on the clamped line x0) reads as a uniform curvature at every column, the clamped column included, and
+// the energy is the plate's over the area inside the clamp (the clamped column counts half its cell).
+TEST(PeridynamicPlate, ClampedEdgeContinuesTheBendingFieldEvenly) {
+  const Real side = 60, dx = 5, t = 2, x0 = 2.5, k = 1e-6;
+  for (Real factor : {1.4, 3.015}) {
+    PlateFixture f(side, dx, t, 2, factor, 0.25, [](const Vec3& x, int) { return x.x() < 3; });
+    ASSERT_EQ(f.plate->mirror().edges.size(), 1u);
+    const PointMatrix u = f.kirchhoff([&](Real x, Real, Real& u0, Real& v0, Real& w, Real& wx, Real& wy) {
+      u0 = v0 = wy = 0;
+      w = 0.5 * k * (x - x0) * (x - x0);
+      wx = k * (x - x0);
+    });
+    const Real bending = 0.5 * bending_rigidity(t) * k * k * (side - x0) * side;
+    EXPECT_NEAR(f.energy(u) / bending, 1.0, 2e-3) << factor;
+  }
+}
+
+// A simple support continues the field oddly: the twist w = k (x - x0) y (zero deflection on the
+// supported line x0, where a simply supported edge carries a twisting moment) reads as a uniform twist at
+// every column, and the energy is the plate's over the area inside the support.
+TEST(PeridynamicPlate, SimplySupportedEdgeContinuesTheTwistOddly) {
+  const Real side = 60, dx = 5, t = 2, x0 = 2.5, k = 1e-6;
+  for (Real factor : {1.4, 3.015}) {
+    PlateFixture f(side, dx, t, 2, factor, 0.25, [](const Vec3& x, int component) { return x.x() < 3 && component == 2; });
+    ASSERT_EQ(f.plate->mirror().edges.size(), 1u);
+    const PointMatrix u = f.kirchhoff([&](Real x, Real y, Real& u0, Real& v0, Real& w, Real& wx, Real& wy) {
+      u0 = v0 = 0;
+      w = k * (x - x0) * y;
+      wx = k * y;
+      wy = k * (x - x0);
+    });
+    const Real twisting = bending_rigidity(t) * (1 - poisson) * k * k * (side - x0) * side;
+    EXPECT_NEAR(f.energy(u) / twisting, 1.0, 2e-3) << factor;
   }
 }
