@@ -13,6 +13,7 @@
 
 #include "app/run_command.hpp"
 #include "core/error.hpp"
+#include "core/runtime_module.hpp"
 #include "io/yaml_reader.hpp"
 
 namespace py = pybind11;
@@ -167,6 +168,7 @@ py::dict run_case(const std::string& path, const std::string& output, int thread
 }  // namespace
 
 PYBIND11_MODULE(_lamina, m) {
+  lamina::select_blas_kernels();  // before any module loads OpenBLAS (core/runtime_module.hpp)
   m.doc() = "lamina's compiled core; use the package lamina (python/lamina/__init__.py)";
   static py::exception<lamina::InputError> input_error(m, "InputErrorBase");
   py::register_exception_translator([](std::exception_ptr p) {

@@ -21,6 +21,7 @@
 #include "app/run_command.hpp"
 #include "app/validate_command.hpp"
 #include "core/memory.hpp"
+#include "core/runtime_module.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/omll_deck.hpp"
@@ -88,6 +89,7 @@ int run_under_mpirun(int argc, char** argv, int ranks, int threads) {
 
 int main(int argc, char** argv) {
   lamina::use_huge_page_heap();  // before any thread starts (core/memory.hpp)
+  lamina::select_blas_kernels();  // before any module loads OpenBLAS (core/runtime_module.hpp)
   std::optional<lamina::parallel::Environment> mpi;  // MPI only when started by mpirun
   try {
     mpi.emplace(argc, argv);

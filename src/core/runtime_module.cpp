@@ -2,12 +2,32 @@
 
 #include <dlfcn.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <mutex>
 #include <vector>
 
 namespace lamina {
 
+void select_blas_kernels() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (std::getenv("OPENBLAS_CORETYPE")) return;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_cpu_init();
+    const char* family = nullptr;
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512cd"))
+      family = "SkylakeX";
+    else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+      family = "Haswell";
+    if (family) setenv("OPENBLAS_CORETYPE", family, 0);
+#endif
+  });
+}
+
 void* open_runtime_module(const char* file_name, const char* build_path, const char* symbol, std::string& why) {
+  select_blas_kernels();
   std::vector<std::filesystem::path> candidates;
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);

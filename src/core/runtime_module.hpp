@@ -5,6 +5,16 @@
 
 namespace lamina {
 
+/// OpenBLAS (Debian's DYNAMIC_ARCH build, loaded with the sparse solver modules) picks its kernels from
+/// the CPU model when it is loaded; version 0.3.21 does not know CPUs newer than it (Sapphire and Emerald
+/// Rapids, models 143 / 207) and falls back to its generic Prescott (SSE3) kernels, which made CHOLMOD's
+/// supernodal factorisation 2.3 x slower (bench/pd_plate_buckling.py: 9.5 s against 4.1 s). Unless the
+/// user set OPENBLAS_CORETYPE, this names the kernel family from the CPU's own feature flags (AVX-512:
+/// SkylakeX, AVX2 + FMA: Haswell, else OpenBLAS's own choice). Called once, at start-up (main, the Python
+/// module) and before the first module opens; only the kernels' speed changes, not the arithmetic's order
+/// within a kernel family.
+void select_blas_kernels();
+
 /// Opens the module file `file_name` (RTLD_NOW | RTLD_LOCAL): beside the running program (the installed
 /// layout), one folder up (the test and bench programs), then at `build_path` (where the build put it; the
 /// Python module). Returns the address of `symbol` in the first candidate that opens and has it (the module
