@@ -309,6 +309,17 @@ void PeridynamicAnalysis::run(OutputSink& sink) {
                               "not a clamp; to clamp them hold their rotations too (fix: [x, y, z, rx, ry], docs/pd.md)",
                               fully));
   }
+  if (const auto* plate = dynamic_cast<const PeridynamicPlate*>(model_.get()); plate && comm_.rank() == 0) {
+    const auto& edges = plate->mirror().edges;
+    std::string list;
+    for (const auto& edge : edges) list += (list.empty() ? "" : ", ") + edge;
+    sink.notice(!problem_.body.plate_edge_mirror
+                    ? std::string("plate model: one-sided families at every edge (pd.plate_edges: one_sided)")
+                : edges.empty() ? std::string("plate model: no straight supported outer edge, every edge's families "
+                                              "are one-sided (pd.plate_edges, docs/pd.md)")
+                              : fmt::format("plate model: the families reach across the supported edges {} into mirror "
+                                            "columns (pd.plate_edges: mirror, docs/pd.md)", list));
+  }
   switch (problem_.analysis) {
     case PdAnalysisKind::linear_static: run_linear_static(&sink); break;
     case PdAnalysisKind::quasi_static: run_quasi_static(&sink); break;
