@@ -29,7 +29,6 @@ PeridynamicPlate::PeridynamicPlate(PlateColumns columns, const PointMatrix& refe
     : columns_(std::move(columns)), reference_(reference), nodes_(reference.cols()) {
   const PlateColumns& pc = columns_;
   const Index nc = pc.columns();
-  real_columns_ = nc;
   thickness_ = pc.thickness;
   bending_factor_ = thickness_ * thickness_ / 12.0;
   // Column centres (in-plane, from the lattice), volumes and moduli.
@@ -292,7 +291,7 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
       const Vec3 ce = cps * e, ck = bending_factor_ * (cps * k);
       Vec3 sigma = ce + Vec3(et * q * alpha, et * q * alpha, 0);
       Real w = 0.5 * e.dot(ce) + 0.5 * et * q * q + 0.5 * k.dot(ck);
-      for (int t = 0; t < 2; ++t)  // the strip outside a clamp whose tangential motion is free (a bar)
+      for (int t = 0; t < 2; ++t)  // the half-cell strip beyond a mirror line, free along it (a bar)
         if (const Real strip = mirror_.strip(t, i); strip > 0) {
           sigma[t] += strip * et * e[t];
           w += 0.5 * strip * et * e[t] * e[t];
@@ -360,7 +359,7 @@ void PeridynamicPlate::update(const PointMatrix& u, ModelState& state, bool /*li
 
 std::vector<std::vector<Index>> PeridynamicPlate::expanded_families() const {
   const PeridynamicBody& fam = *family_;
-  const Index nc = real_columns_;
+  const Index nc = columns_.columns();
   std::vector<std::vector<Index>> out(static_cast<std::size_t>(nc));
 #pragma omp parallel for schedule(dynamic, 64)
   for (Index i = 0; i < nc; ++i) {

@@ -89,9 +89,10 @@ class PeridynamicPlate : public PeridynamicModel {
   /// Calls f(term) for each term of column c's motion (a real column: itself, factors 1).
   template <class F>
   void for_each_term(Index c, const F& f) const {
-    if (c < real_columns_) f(MirrorTerm{c, Vec3::Ones(), Vec3::Ones()});
+    const Index real = columns_.columns();
+    if (c < real) f(MirrorTerm{c, Vec3::Ones(), Vec3::Ones()});
     else
-      for (const MirrorTerm& t : mirror_.motion[static_cast<std::size_t>(c - real_columns_)]) f(t);
+      for (const MirrorTerm& t : mirror_.motion[static_cast<std::size_t>(c - real)]) f(t);
   }
   /// B_b of the bonds [b0, b1) of one column; returns the polynomial degree used.
   int gradient_weights(Index b0, Index b1, Real horizon);
@@ -99,7 +100,6 @@ class PeridynamicPlate : public PeridynamicModel {
   PlateColumns columns_;
   // mirror columns across supported edges: family members nc .. nc + G - 1, moving with real columns
   PlateEdgeMirror mirror_;
-  Index real_columns_ = 0;
   // restrict_to_nodes: the columns whose force, bond terms and kinematics are computed (empty: all)
   std::vector<char> force_column_, bond_column_, kinematic_column_;
   static bool marked(const std::vector<char>& set, Index c) { return set.empty() || set[static_cast<std::size_t>(c)]; }
